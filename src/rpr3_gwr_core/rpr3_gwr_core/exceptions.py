@@ -1,0 +1,72 @@
+"""The one exception hierarchy of :mod:`rpr3_gwr_core`.
+
+Every public function raises a subclass of :class:`GWRError`; each class
+carries a stable ``code`` string so that callers (the CLI, the ROS nodes) can
+map an error to their own error constants without parsing messages.
+"""
+
+__all__ = [
+    "GWRError",
+    "InvalidInputError",
+    "OutOfGridError",
+    "Rho1MismatchError",
+    "NoSolutionError",
+    "AssemblyModeError",
+    "SingularityError",
+    "InfeasiblePathError",
+    "ValidationError",
+]
+
+
+class GWRError(Exception):
+    """Base class of every error raised by :mod:`rpr3_gwr_core`."""
+
+    code = "ERROR"
+
+
+class InvalidInputError(GWRError, ValueError):
+    """An argument is malformed: NaN, infinite, negative, wrong shape."""
+
+    code = "INVALID_INPUT"
+
+
+class OutOfGridError(GWRError, ValueError):
+    """A configuration lies outside the grid the roadmap was built on."""
+
+    code = "OUT_OF_GRID"
+
+
+class Rho1MismatchError(GWRError, ValueError):
+    """A configuration's rho1 differs from the roadmap's fixed rho1."""
+
+    code = "RHO1_MISMATCH"
+
+
+class NoSolutionError(GWRError, ValueError):
+    """The direct kinematics has no real solution at the requested legs."""
+
+    code = "NO_SOLUTION"
+
+
+class AssemblyModeError(GWRError, ValueError):
+    """No assembly mode lies near the requested platform orientation."""
+
+    code = "NO_ASSEMBLY_MODE"
+
+
+class SingularityError(GWRError, ValueError):
+    """A configuration is on, or too near, a parallel singularity."""
+
+    code = "SINGULAR"
+
+
+class InfeasiblePathError(GWRError):
+    """The roadmap connects no path between two configurations."""
+
+    code = "INFEASIBLE"
+
+
+class ValidationError(GWRError):
+    """A computed plan failed the independent trajectory validator."""
+
+    code = "VALIDATION_FAILED"

@@ -1,0 +1,183 @@
+"""The n-solution field: every direct-kinematic solution of every grid cell.
+
+The grid discretises the reduced configuration space (rho2, rho3) at a fixed
+rho1 (paper section 5: rho2, rho3 in [0, 50], step 0.125, 401 x 401 cells).
+Cells are the grid's sample points; cell ``(i, j)`` is at
+``(rho2[i], rho3[j])`` and its flat index is ``i * n3 + j`` (row-major).
+"""
+
+from dataclasses import dataclass
+import math
+
+import numpy as np
+
+from .exceptions import InvalidInputError, OutOfGridError
+from .geometry import PAPER_GEOMETRY
+from .kinematics import MAX_SOLUTIONS, _singularity_margin, _solve
+
+__all__ = ["Grid", "NSolutionField", "compute_field", "PAPER_GRID"]
+
+
+@dataclass(frozen=True)
+class Grid:
+    """A uniform grid over (rho2, rho3) at fixed rho1.
+
+    Attributes
+    ----------
+    rho1 : float
+        Fixed first leg [length unit].
+    rho2_range, rho3_range : tuple of float
+        Inclusive (min, max) of each axis [length unit].
+    step : float
+        Cell spacing on both axes [length unit].
+    """
+
+    rho1: float = 17.0
+    rho2_range: tuple = (0.0, 50.0)
+    rho3_range: tuple = (0.0, 50.0)
+    step: float = 0.125
+
+    def __post_init__(self):
+        values = [self.rho1, *self.rho2_range, *self.rho3_range, self.step]
+        if len(self.rho2_range) != 2 or len(self.rho3_range) != 2:
+            raise InvalidInputError("axis ranges are (min, max) pairs")
+        if not all(isinstance(v, (int, float, np.floating, np.integer)) and math.isfinite(v)
+                   for v in values):
+            raise InvalidInputError(f"grid values must be finite numbers, got {values}")
+        if self.rho1 <= 0:
+            raise InvalidInputError(f"rho1 must be positive, got {self.rho1}")
+        if self.step <= 0:
+            raise InvalidInputError(f"step must be positive, got {self.step}")
+        for name in ("rho2_range", "rho3_range"):
+            lo, hi = getattr(self, name)
+            if lo < 0 or hi < lo:
+                raise InvalidInputError(f"{name} must satisfy 0 <= min <= max, got {(lo, hi)}")
+            object.__setattr__(self, name, (float(lo), float(hi)))
+        object.__setattr__(self, "rho1", float(self.rho1))
+        object.__setattr__(self, "step", float(self.step))
+
+    @property
+    def shape(self):
+        """Number of cells along (rho2, rho3)."""
+        return (_count(self.rho2_range, self.step), _count(self.rho3_range, self.step))
+
+    @property
+    def size(self):
+        """Total number of cells."""
+        n2, n3 = self.shape
+        return n2 * n3
+
+    @property
+    def rho2(self):
+        """rho2 of each row, shape (n2,) [length unit]."""
+        return self.rho2_range[0] + self.step * np.arange(self.shape[0])
+
+    @property
+    def rho3(self):
+        """rho3 of each column, shape (n3,) [length unit]."""
+        return self.rho3_range[0] + self.step * np.arange(self.shape[1])
+
+    def rho(self):
+        """(rho1, rho2, rho3) of every cell, shape (n2 * n3, 3), row-major."""
+        r2, r3 = np.meshgrid(self.rho2, self.rho3, indexing="ij")
+        return np.stack([np.full(r2.size, self.rho1), r2.ravel(), r3.ravel()], axis=-1)
+
+    def cell_of(self, rho2, rho3):
+        """Flat index of the cell nearest to (rho2, rho3).
+
+        Raises
+        ------
+        OutOfGridError
+            If the point lies farther than half a step outside the grid.
+        """
+        index = []
+        for value, (lo, _), n in ((rho2, self.rho2_range, self.shape[0]),
+                                  (rho3, self.rho3_range, self.shape[1])):
+            k = int(round((value - lo) / self.step))
+            if not 0 <= k < n:
+                raise OutOfGridError(f"({rho2}, {rho3}) lies outside the grid "
+                                     f"rho2 {self.rho2_range}, rho3 {self.rho3_range}")
+            index.append(k)
+        return index[0] * self.shape[1] + index[1]
+
+    def to_dict(self):
+        """Plain-data form, for JSON and cache keys."""
+        return {"rho1": self.rho1, "rho2_range": list(self.rho2_range),
+                "rho3_range": list(self.rho3_range), "step": self.step}
+
+    @classmethod
+    def from_dict(cls, data):
+        """Inverse of :meth:`to_dict`."""
+        try:
+            return cls(rho1=data["rho1"], rho2_range=tuple(data["rho2_range"]),
+                       rho3_range=tuple(data["rho3_range"]), step=data["step"])
+        except (KeyError, TypeError) as exc:
+            raise InvalidInputError(f"malformed grid: {exc}") from exc
+
+
+def _count(axis_range, step):
+    lo, hi = axis_range
+    return int(math.floor((hi - lo) / step + 1e-9)) + 1
+
+
+PAPER_GRID = Grid()
+_CHUNK = 16384
+
+
+@dataclass(frozen=True, eq=False)
+class NSolutionField:
+    """Direct-kinematic solutions of every cell of a grid.
+
+    Attributes
+    ----------
+    geometry : Geometry
+    grid : Grid
+    count : ndarray of uint8, shape (n2 * n3,)
+        Number of real solutions of each cell.
+    poses : ndarray, shape (n2 * n3, 6, 3)
+        ``(x, y, alpha)`` of each solution [length unit, length unit, rad],
+        sorted by alpha; NaN beyond ``count``.
+    margin : ndarray, shape (n2 * n3, 6)
+        Signed normalised ``det(Jx)`` of each solution
+        (:func:`~rpr3_gwr_core.kinematics.singularity_margin`); NaN beyond ``count``.
+    """
+
+    geometry: object
+    grid: Grid
+    count: np.ndarray
+    poses: np.ndarray
+    margin: np.ndarray
+
+    @property
+    def aspect(self):
+        """``sign(det Jx)`` of each solution, shape (n2 * n3, 6), 0 where none."""
+        return np.nan_to_num(np.sign(self.margin)).astype(np.int8)
+
+    @property
+    def valid(self):
+        """Mask of existing solutions, shape (n2 * n3, 6)."""
+        return np.arange(MAX_SOLUTIONS) < self.count[:, None]
+
+
+def compute_field(geometry=PAPER_GEOMETRY, grid=PAPER_GRID):
+    """Solve the direct kinematics on every cell of a grid.
+
+    Parameters
+    ----------
+    geometry : Geometry
+    grid : Grid
+
+    Returns
+    -------
+    NSolutionField
+    """
+    rho = grid.rho()
+    count = np.empty(grid.size, dtype=np.uint8)
+    poses = np.empty((grid.size, MAX_SOLUTIONS, 3))
+    # Chunks bound the temporaries of the root finder (they scale with cells).
+    for start in range(0, grid.size, _CHUNK):
+        part = slice(start, start + _CHUNK)
+        count[part], poses[part] = _solve(rho[part], geometry)
+    with np.errstate(invalid="ignore"):
+        margin = np.where(np.isfinite(poses[..., 0]), _singularity_margin(poses, geometry), np.nan)
+    return NSolutionField(geometry=geometry, grid=grid, count=count, poses=poses, margin=margin)

@@ -1,0 +1,495 @@
+"""Inverse and direct kinematics, Jacobians, aspects and degeneracy of the 3-RPR.
+
+Conventions (paper section 4.1): the platform pose is ``(x, y, alpha)`` with
+``B1 = (x, y)``, ``B2 = B1 + d1 (cos alpha, sin alpha)`` and
+``B3 = B1 + d3 (cos(alpha + beta), sin(alpha + beta))``; the legs are
+``rho_i = |B_i - A_i|``.  The constraint equations are
+``F_i = |B_i - A_i|**2 - rho_i**2 = 0`` and their time derivative is
+``Jq dq/dt = Jx dx/dt`` with ``Jx = dF/dx`` and ``Jq = diag(2 rho)``.
+
+The direct kinematics eliminates (x, y) to the paper's equation (7), a
+trigonometric polynomial of degree 3 in alpha (its degree-4 harmonics cancel),
+i.e. the classic sextic.  Its seven Fourier coefficients are linear in
+``(u**2, u v, v**2, u, v, 1, rho1**2)`` with ``u = rho2**2 - rho1**2`` and
+``v = rho3**2 - rho1**2``, so they cost one small matrix product per batch of
+configurations; the roots come from the eigenvalues of a companion matrix in
+``t = tan((alpha - alpha0) / 2)``, ``alpha0`` chosen per configuration so that
+no root sits near ``t = inf``.
+"""
+
+import math
+
+import numpy as np
+
+from .exceptions import InvalidInputError
+from .geometry import PAPER_GEOMETRY
+
+__all__ = [
+    "MAX_SOLUTIONS",
+    "inverse_kinematics",
+    "direct_kinematics",
+    "direct_kinematics_batch",
+    "passive_angles",
+    "parallel_jacobian",
+    "serial_jacobian",
+    "singularity_margin",
+    "aspect",
+    "degenerate_orientations",
+    "constraint_residual",
+    "newton_correct",
+]
+
+MAX_SOLUTIONS = 6
+
+# A root of the sextic is real when its orientation's imaginary part is below
+# this; a double root splits into a pair whose imaginary parts are of order
+# sqrt(machine epsilon), so a degenerate (non-singular) double root stays real.
+_IMAG_TOL = 1e-6
+# |AE - BD| below this (relative to its scale) makes (x, y) ill-conditioned in
+# the linear formula: the pose then comes from the circle of leg 1 instead.
+_DEGENERATE_TOL = 1e-6
+_SAMPLES = 64
+
+
+def _as_pose(pose):
+    pose = np.asarray(pose, dtype=float)
+    if pose.shape[-1:] != (3,):
+        raise InvalidInputError(f"a pose has 3 components (x, y, alpha), got shape {pose.shape}")
+    if not np.all(np.isfinite(pose)):
+        raise InvalidInputError("pose contains NaN or infinity")
+    return pose
+
+
+def _as_rho(rho):
+    rho = np.asarray(rho, dtype=float)
+    if rho.shape[-1:] != (3,):
+        raise InvalidInputError(f"rho has 3 components, got shape {rho.shape}")
+    if not np.all(np.isfinite(rho)):
+        raise InvalidInputError("rho contains NaN or infinity")
+    if np.any(rho < 0):
+        raise InvalidInputError("leg lengths rho must be non-negative")
+    return rho
+
+
+def _leg_vectors(pose, geometry):
+    """``B_i - A_i`` and the platform offsets, shapes (..., 3, 2)."""
+    x, y, alpha = pose[..., 0], pose[..., 1], pose[..., 2]
+    e1 = np.stack([np.cos(alpha), np.sin(alpha)], axis=-1)
+    e3 = np.stack([np.cos(alpha + geometry.beta), np.sin(alpha + geometry.beta)], axis=-1)
+    b1 = np.stack([x, y], axis=-1)
+    offsets = np.stack([np.zeros_like(e1), geometry.d1 * e1, geometry.d3 * e3], axis=-2)
+    legs = b1[..., None, :] + offsets - geometry.base
+    return legs, offsets
+
+
+def inverse_kinematics(pose, geometry=PAPER_GEOMETRY):
+    """Leg lengths of a platform pose.
+
+    Parameters
+    ----------
+    pose : array_like, shape (..., 3)
+        ``(x, y, alpha)`` [length unit, length unit, rad].
+    geometry : Geometry
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``(rho1, rho2, rho3)`` [length unit].
+    """
+    legs, _ = _leg_vectors(_as_pose(pose), geometry)
+    return np.linalg.norm(legs, axis=-1)
+
+
+def passive_angles(pose, geometry=PAPER_GEOMETRY):
+    """Directions of the legs, the passive joint angles theta1..theta3.
+
+    Parameters
+    ----------
+    pose : array_like, shape (..., 3)
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``theta_i = atan2(B_i - A_i)`` [rad] in (-pi, pi].
+    """
+    legs, _ = _leg_vectors(_as_pose(pose), geometry)
+    return np.arctan2(legs[..., 1], legs[..., 0])
+
+
+def parallel_jacobian(pose, geometry=PAPER_GEOMETRY):
+    """The parallel Jacobian ``Jx = dF/d(x, y, alpha)``.
+
+    Parameters
+    ----------
+    pose : array_like, shape (..., 3)
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Row i is ``2 (u_x, u_y, u . dB_i/dalpha)`` with ``u = B_i - A_i``.
+    """
+    return _parallel_jacobian(_as_pose(pose), geometry)
+
+
+def _parallel_jacobian(pose, geometry):
+    u1x, u1y, u2x, u2y, w2, u3x, u3y, w3 = _rows(pose, geometry)
+    zero = np.zeros_like(u1x)
+    return 2.0 * np.stack([np.stack([u1x, u1y, zero], -1), np.stack([u2x, u2y, w2], -1),
+                           np.stack([u3x, u3y, w3], -1)], -2)
+
+
+def _rows(pose, geometry):
+    """Entries of ``Jx / 2``: legs ``u_i = B_i - A_i`` and ``w_i = u_i . dB_i/dalpha``
+    (``w_1 = 0`` because B1 is the platform's reference point)."""
+    x, y, alpha = pose[..., 0], pose[..., 1], pose[..., 2]
+    (a1x, a1y), (a2x, a2y), (a3x, a3y) = geometry.a1, geometry.a2, geometry.a3
+    c, s = np.cos(alpha), np.sin(alpha)
+    c3, s3 = np.cos(alpha + geometry.beta), np.sin(alpha + geometry.beta)
+    u1x, u1y = x - a1x, y - a1y
+    u2x, u2y = x + geometry.d1 * c - a2x, y + geometry.d1 * s - a2y
+    u3x, u3y = x + geometry.d3 * c3 - a3x, y + geometry.d3 * s3 - a3y
+    w2 = geometry.d1 * (c * u2y - s * u2x)
+    w3 = geometry.d3 * (c3 * u3y - s3 * u3x)
+    return u1x, u1y, u2x, u2y, w2, u3x, u3y, w3
+
+
+def _det_rows(u1x, u1y, u2x, u2y, w2, u3x, u3y, w3):
+    return u1x * (u2y * w3 - w2 * u3y) + u1y * (w2 * u3x - u2x * w3)
+
+
+def _solve_rows(rows, r1, r2, r3):
+    """``(Jx / 2)^-1 r`` by the adjugate of the rows; a singular system gives 0."""
+    a, b, c, d, e, f, g, h = rows
+    det = _det_rows(*rows)
+    inv = np.where(det != 0, 1.0 / np.where(det != 0, det, 1.0), 0.0)
+    dx = ((d * h - e * g) * r1 - b * h * r2 + b * e * r3) * inv
+    dy = ((e * f - c * h) * r1 + a * h * r2 - a * e * r3) * inv
+    da = ((c * g - d * f) * r1 + (b * f - a * g) * r2 + (a * d - b * c) * r3) * inv
+    return np.stack([dx, dy, da], axis=-1)
+
+
+def singularity_margin(pose, geometry=PAPER_GEOMETRY):
+    """Signed, normalised distance from a parallel singularity.
+
+    The orientation column of ``Jx`` is divided by ``geometry.scale`` so that
+    all columns are lengths, then ``det(Jx)`` is divided by the product of the
+    row norms (Hadamard's bound).  The result lies in [-1, 1], is 0 exactly on
+    a parallel singularity and its sign is the aspect.
+
+    Parameters
+    ----------
+    pose : array_like, shape (..., 3)
+
+    Returns
+    -------
+    ndarray, shape (...)
+    """
+    return _singularity_margin(_as_pose(pose), geometry)
+
+
+def _singularity_margin(pose, geometry):
+    rows = _rows(pose, geometry)
+    u1x, u1y, u2x, u2y, w2, u3x, u3y, w3 = rows
+    scale = geometry.scale
+    norms = (np.hypot(u1x, u1y) * np.sqrt(u2x**2 + u2y**2 + (w2 / scale) ** 2)
+             * np.sqrt(u3x**2 + u3y**2 + (w3 / scale) ** 2))
+    det = _det_rows(*rows) / scale
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(norms > 0, det / np.where(norms > 0, norms, 1.0), 0.0)
+
+
+def aspect(pose, geometry=PAPER_GEOMETRY):
+    """``sign(det Jx)`` of a pose: +1 or -1 (0 exactly on a singularity).
+
+    Returns
+    -------
+    ndarray of int8, shape (...)
+    """
+    return np.sign(singularity_margin(pose, geometry)).astype(np.int8)
+
+
+def constraint_residual(pose, rho, geometry=PAPER_GEOMETRY):
+    """``F(q, x) = |B_i - A_i|**2 - rho_i**2``, shape (..., 3) [length unit**2]."""
+    legs, _ = _leg_vectors(_as_pose(pose), geometry)
+    return np.sum(legs * legs, axis=-1) - _as_rho(rho) ** 2
+
+
+def newton_correct(pose, rho, geometry=PAPER_GEOMETRY, iterations=3):
+    """Newton steps on the constraint equations at fixed legs.
+
+    Parameters
+    ----------
+    pose : array_like, shape (..., 3)
+        Initial guesses.
+    rho : array_like, shape (..., 3)
+        Leg lengths to satisfy.
+    iterations : int
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Corrected poses (alpha is not wrapped).
+    """
+    return _newton(_as_pose(pose).copy(), _as_rho(rho), geometry, iterations)
+
+
+def _newton(pose, rho, geometry, iterations):
+    rho_sq = rho**2
+    for _ in range(iterations):
+        rows = _rows(pose, geometry)
+        u1x, u1y, u2x, u2y, _, u3x, u3y, _ = rows
+        pose = pose - 0.5 * _solve_rows(rows, u1x**2 + u1y**2 - rho_sq[..., 0],
+                                        u2x**2 + u2y**2 - rho_sq[..., 1],
+                                        u3x**2 + u3y**2 - rho_sq[..., 2])
+    return pose
+
+
+def _predict(pose, rho_from, rho_to, geometry):
+    """Euler step of the platform for a change of legs: ``Jx dx = Jq drho``."""
+    drho = rho_to - rho_from
+    return pose + _solve_rows(_rows(pose, geometry), *np.moveaxis(rho_from * drho, -1, 0))
+
+
+# --- direct kinematics ---------------------------------------------------------
+
+def _linear_terms(alpha, geometry):
+    """The paper's A..F of equation (7) at orientations ``alpha``."""
+    (a2x, a2y), (a3x, a3y) = geometry.a2, geometry.a3
+    d1, d3, beta = geometry.d1, geometry.d3, geometry.beta
+    c1, s1 = np.cos(alpha), np.sin(alpha)
+    c3, s3 = np.cos(alpha + beta), np.sin(alpha + beta)
+    # Leg 1 is at the origin of the paper's derivation: shift the base so A1 = 0.
+    a1x, a1y = geometry.a1
+    a2x, a2y, a3x, a3y = a2x - a1x, a2y - a1y, a3x - a1x, a3y - a1y
+    big_a = -2 * a2x + 2 * d1 * c1
+    big_b = -2 * a2y + 2 * d1 * s1
+    big_c = d1**2 + a2x**2 + a2y**2 - 2 * d1 * (a2x * c1 + a2y * s1)
+    big_d = -2 * a3x + 2 * d3 * c3
+    big_e = -2 * a3y + 2 * d3 * s3
+    big_f = d3**2 + a3x**2 + a3y**2 - 2 * d3 * (a3x * c3 + a3y * s3)
+    return big_a, big_b, big_c, big_d, big_e, big_f
+
+
+def _basis_coefficients(geometry):
+    """Fourier coefficients of the seven basis functions of equation (7).
+
+    Returns an array (7, 7): row j is basis function j, columns are
+    ``(a0, a1, b1, a2, b2, a3, b3)`` of ``a0 + sum a_k cos k alpha + b_k sin k alpha``.
+    """
+    n = 16
+    alpha = 2 * np.pi * np.arange(n) / n
+    big_a, big_b, big_c, big_d, big_e, big_f = _linear_terms(alpha, geometry)
+    k1 = big_b * big_f - big_e * big_c
+    k2 = big_d * big_c - big_a * big_f
+    delta = big_a * big_e - big_b * big_d
+    basis = np.stack([
+        big_e**2 + big_d**2,
+        -2 * (big_e * big_b + big_d * big_a),
+        big_a**2 + big_b**2,
+        2 * (big_e * k1 - big_d * k2),
+        2 * (big_a * k2 - big_b * k1),
+        k1**2 + k2**2,
+        delta**2,
+    ])
+    spectrum = np.fft.rfft(basis, axis=1) / n
+    coeffs = np.empty((7, 7))
+    coeffs[:, 0] = spectrum[:, 0].real
+    coeffs[:, 1::2] = 2 * spectrum[:, 1:4].real
+    coeffs[:, 2::2] = -2 * spectrum[:, 1:4].imag
+    return coeffs
+
+
+def _tan_half_matrix():
+    """Map from trigonometric coefficients to the sextic in t = tan(phi / 2).
+
+    ``(1 + t**2)**3 exp(i k phi) = (1 + i t)**(2 k) (1 + t**2)**(3 - k)``.
+    Rows follow ``(a0, a1, b1, a2, b2, a3, b3)``; columns are ascending powers.
+    """
+    one_it = np.array([1.0, 1.0j])
+    one_t2 = np.array([1.0, 0.0, 1.0])
+    rows = []
+    for k in range(4):
+        poly = np.polynomial.polynomial.polymul(
+            np.polynomial.polynomial.polypow(one_it, 2 * k),
+            np.polynomial.polynomial.polypow(one_t2, 3 - k))
+        poly = np.pad(poly, (0, 7 - len(poly)))
+        rows.append(poly.real)
+        if k:
+            rows.append(poly.imag)
+    return np.array(rows)
+
+
+_TAN_HALF = _tan_half_matrix()
+_HARMONICS = np.array([0, 1, 1, 2, 2, 3, 3])
+
+
+def _trig_basis(phi):
+    """Basis values ``(1, cos phi, sin phi, ..., sin 3 phi)``, shape (7, len(phi))."""
+    rows = [np.ones_like(phi)]
+    for k in (1, 2, 3):
+        rows += [np.cos(k * phi), np.sin(k * phi)]
+    return np.array(rows)
+
+
+def _equation7_coefficients(rho1, rho2, rho3, geometry):
+    u = rho2**2 - rho1**2
+    v = rho3**2 - rho1**2
+    weights = np.stack([u * u, u * v, v * v, u, v, np.ones_like(u), -rho1**2], axis=-1)
+    return weights @ _basis_coefficients(geometry)
+
+
+def _shift(coeffs, alpha0):
+    """Coefficients of ``phi -> f(alpha0 + phi)``."""
+    out = coeffs.copy()
+    for k in (1, 2, 3):
+        c, s = np.cos(k * alpha0), np.sin(k * alpha0)
+        a, b = coeffs[:, 2 * k - 1], coeffs[:, 2 * k]
+        out[:, 2 * k - 1] = a * c + b * s
+        out[:, 2 * k] = b * c - a * s
+    return out
+
+
+def _real_roots(coeffs):
+    """Real roots of trigonometric cubics, shape (n, 6) [rad], NaN-padded."""
+    n = coeffs.shape[0]
+    roots = np.full((n, MAX_SOLUTIONS), np.nan)
+    phi = 2 * np.pi * np.arange(_SAMPLES) / _SAMPLES
+    values = coeffs @ _trig_basis(phi)
+    # |f'| <= sum k (|a_k| + |b_k|): a row whose samples all stay farther than
+    # that times half a sample interval from zero has no root at all.
+    reach = np.abs(coeffs) @ _HARMONICS.astype(float) * (np.pi / _SAMPLES)
+    maybe = np.flatnonzero(~((values.min(axis=1) > reach) | (values.max(axis=1) < -reach)))
+    if maybe.size:
+        roots[maybe] = np.sort(_companion_roots(coeffs[maybe], phi, values[maybe]), axis=1)
+    return roots
+
+
+def _companion_roots(coeffs, phi, values):
+    """Real roots from the eigenvalues of the sextic's companion matrix."""
+    # Put t = inf where |f| is largest so the sextic keeps its degree.
+    alpha0 = phi[np.argmax(np.abs(values), axis=1)] + np.pi
+    poly = _shift(coeffs, alpha0) @ _TAN_HALF
+    companion = np.zeros((len(coeffs), 6, 6))
+    companion[:, np.arange(1, 6), np.arange(5)] = 1.0
+    companion[:, :, 5] = -poly[:, :6] / poly[:, 6:7]
+    t = np.linalg.eigvals(companion)
+    alpha = 2 * np.arctan(t.astype(complex)) + alpha0[:, None]
+    real = np.abs(alpha.imag) < _IMAG_TOL
+    return np.where(real, np.angle(np.exp(1j * alpha.real)), np.nan)
+
+
+def direct_kinematics_batch(rho, geometry=PAPER_GEOMETRY):
+    """All real direct-kinematic solutions of many leg configurations.
+
+    Parameters
+    ----------
+    rho : array_like, shape (n, 3)
+        Leg lengths [length unit], finite and non-negative.
+    geometry : Geometry
+
+    Returns
+    -------
+    count : ndarray of uint8, shape (n,)
+        Number of real solutions.
+    poses : ndarray, shape (n, 6, 3)
+        ``(x, y, alpha)`` of each solution sorted by alpha in (-pi, pi];
+        NaN beyond ``count``.  Near a degenerate orientation, where two
+        assembly modes share alpha, the two differ in (x, y).
+    """
+    rho = _as_rho(rho)
+    if rho.ndim != 2:
+        raise InvalidInputError(f"rho must have shape (n, 3), got {rho.shape}")
+    return _solve(rho, geometry)
+
+
+def _solve(rho, geometry):
+    n = rho.shape[0]
+    rho1, rho2, rho3 = rho[:, 0], rho[:, 1], rho[:, 2]
+    alpha = _real_roots(_equation7_coefficients(rho1, rho2, rho3, geometry))
+    poses = np.full((n, MAX_SOLUTIONS, 3), np.nan)
+    rows, cols = np.nonzero(np.isfinite(alpha))
+    if rows.size == 0:
+        return np.zeros(n, dtype=np.uint8), poses
+    a = alpha[rows, cols]
+    r = rho[rows]
+    big_a, big_b, big_c, big_d, big_e, big_f = _linear_terms(a, geometry)
+    g = r[:, 1] ** 2 - r[:, 0] ** 2 - big_c
+    h = r[:, 2] ** 2 - r[:, 0] ** 2 - big_f
+    delta = big_a * big_e - big_b * big_d
+    scale = np.abs(big_a * big_e) + np.abs(big_b * big_d) + 1.0
+    regular = np.abs(delta) > _DEGENERATE_TOL * scale
+    safe = np.where(regular, delta, 1.0)
+    x = (big_e * g - big_b * h) / safe
+    y = (big_a * h - big_d * g) / safe
+    ax, ay = geometry.a1
+    candidate = np.stack([x + ax, y + ay, a], axis=-1)
+    if not np.all(regular):
+        candidate[~regular] = _degenerate_poses(
+            r[~regular], a[~regular], cols[~regular], alpha[rows[~regular]],
+            big_a[~regular], big_b[~regular], g[~regular], geometry)
+    poses[rows, cols] = _newton(candidate, r, geometry, 2)
+    poses[..., 2] = np.angle(np.exp(1j * poses[..., 2]))
+    return np.isfinite(alpha).sum(axis=1).astype(np.uint8), poses
+
+
+def _degenerate_poses(rho, alpha, col, cell_alpha, big_a, big_b, g, geometry):
+    """Poses at (near) degenerate orientations, where legs 2 and 3 give
+    parallel lines for B1: intersect leg 2's line with leg 1's circle.  The
+    two roots of the double pair take the two intersections, in the order of
+    their position within the pair so that they do not collapse on one pose."""
+    norm2 = big_a**2 + big_b**2
+    foot = g / norm2
+    px, py = big_a * foot, big_b * foot
+    half = np.sqrt(np.maximum(rho[:, 0] ** 2 - foot**2 * norm2, 0.0) / norm2)
+    # Which member of its close pair is this root?  The lower one takes +.
+    prev = np.where(col > 0, cell_alpha[np.arange(len(col)), np.maximum(col - 1, 0)], -np.inf)
+    is_upper = np.isfinite(prev) & (np.abs(alpha - prev) < 1e-3)
+    sign = np.where(is_upper, -1.0, 1.0)
+    ax, ay = geometry.a1
+    return np.stack([px - sign * big_b * half + ax, py + sign * big_a * half + ay, alpha], axis=-1)
+
+
+def direct_kinematics(rho, geometry=PAPER_GEOMETRY):
+    """All real direct-kinematic solutions of one leg configuration.
+
+    Parameters
+    ----------
+    rho : array_like, shape (3,)
+        ``(rho1, rho2, rho3)`` [length unit].
+
+    Returns
+    -------
+    ndarray, shape (k, 3)
+        ``(x, y, alpha)`` of each of the ``k <= 6`` solutions, sorted by alpha.
+    """
+    rho = _as_rho(rho)
+    if rho.shape != (3,):
+        raise InvalidInputError(f"rho must have shape (3,), got {rho.shape}")
+    count, poses = _solve(rho[None, :], geometry)
+    return poses[0, : count[0]]
+
+
+def degenerate_orientations(geometry=PAPER_GEOMETRY):
+    """Orientations where the direct kinematics degenerates.
+
+    At these alpha the lines for B1 given by legs 2 and 3 are parallel
+    (``AE - BD = 0``), so two assembly modes can share alpha with different
+    positions (paper section 4.2.3).
+
+    Returns
+    -------
+    ndarray, shape (k,)
+        Sorted orientations [rad] in (-pi, pi].
+    """
+    n = 16
+    alpha = 2 * np.pi * np.arange(n) / n
+    big_a, big_b, _, big_d, big_e, _ = _linear_terms(alpha, geometry)
+    spectrum = np.fft.rfft(big_a * big_e - big_b * big_d) / n
+    # AE - BD has harmonics 0 and 1 only: c0 + c1 cos + s1 sin.
+    c0, c1, s1 = spectrum[0].real, 2 * spectrum[1].real, -2 * spectrum[1].imag
+    amplitude = math.hypot(c1, s1)
+    if amplitude <= abs(c0):
+        return np.array([])
+    phase = math.atan2(s1, c1)
+    offset = math.acos(-c0 / amplitude)
+    return np.sort(np.angle(np.exp(1j * np.array([phase + offset, phase - offset]))))

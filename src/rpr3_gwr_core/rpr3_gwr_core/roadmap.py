@@ -1,0 +1,115 @@
+"""The global workspace roadmap (GWR): patches as nodes, gates as edges.
+
+:func:`build_roadmap` runs the whole pipeline (field, regions, patches,
+gates, graph); :func:`roadmap_graph` turns a segmentation into a networkx
+graph whose connected components are the aspects' groups of patches.
+"""
+
+from dataclasses import dataclass
+from time import perf_counter
+
+import networkx as nx
+
+from .field import PAPER_GRID, compute_field
+from .geometry import PAPER_GEOMETRY
+from .segmentation import segment
+
+__all__ = ["Roadmap", "build_roadmap", "roadmap_graph", "aspect_groups"]
+
+
+@dataclass(frozen=True, eq=False)
+class Roadmap:
+    """A built roadmap: its field, segmentation and graph.
+
+    Attributes
+    ----------
+    segmentation : Segmentation
+    graph : networkx.Graph
+        Nodes are patch ids with attributes ``region``, ``layer``, ``aspect``,
+        ``n_solutions``, ``n_cells`` and ``area`` [length unit**2]; edges are
+        gates with ``width`` [length unit] and ``n_faces``.
+    timings : dict of str to float
+        Seconds spent per stage.
+    """
+
+    segmentation: object
+    graph: nx.Graph
+    timings: dict
+
+    @property
+    def field(self):
+        """The n-solution field the roadmap was built from."""
+        return self.segmentation.field
+
+    @property
+    def geometry(self):
+        return self.segmentation.field.geometry
+
+    @property
+    def grid(self):
+        return self.segmentation.field.grid
+
+
+def roadmap_graph(segmentation):
+    """The GWR of a segmentation as an undirected networkx graph.
+
+    Parameters
+    ----------
+    segmentation : Segmentation
+
+    Returns
+    -------
+    networkx.Graph
+    """
+    cell_area = segmentation.field.grid.step ** 2
+    graph = nx.Graph()
+    for pid, patch in segmentation.patches.items():
+        graph.add_node(pid, region=patch.region, layer=patch.layer, aspect=patch.aspect,
+                       n_solutions=patch.n_solutions, n_cells=int(patch.cells.size),
+                       area=float(patch.cells.size * cell_area))
+    for (a, b), gate in segmentation.gates.items():
+        graph.add_edge(a, b, width=float(gate.width), n_faces=int(len(gate.faces)))
+    return graph
+
+
+def aspect_groups(graph):
+    """Connected components of a roadmap, each a sorted list of patch ids,
+    ordered by their smallest id."""
+    return sorted((sorted(c) for c in nx.connected_components(graph)), key=lambda c: c[0])
+
+
+def build_roadmap(geometry=PAPER_GEOMETRY, grid=PAPER_GRID, method="components",
+                  min_region_cells=8, progress=None):
+    """Build the global workspace roadmap of a geometry on a grid.
+
+    Parameters
+    ----------
+    geometry : Geometry
+    grid : Grid
+    method : {"components", "rds"}
+        Patch search (see :func:`~rpr3_gwr_core.segmentation.segment`).
+    min_region_cells : int
+        Smallest set of cells that counts as a region.
+    progress : callable, optional
+        Called as ``progress(stage_name, fraction_done)`` between stages.
+
+    Returns
+    -------
+    Roadmap
+    """
+    report = progress or (lambda stage, fraction: None)
+    timings = {}
+    start = perf_counter()
+    report("n-solution field", 0.0)
+    field = compute_field(geometry, grid)
+    timings["field"] = perf_counter() - start
+    report("regions, patches and gates", 0.4)
+    start = perf_counter()
+    segmentation = segment(field, method=method, min_region_cells=min_region_cells)
+    timings["segmentation"] = perf_counter() - start
+    report("graph", 0.95)
+    start = perf_counter()
+    graph = roadmap_graph(segmentation)
+    timings["graph"] = perf_counter() - start
+    report("done", 1.0)
+    return Roadmap(segmentation=segmentation, graph=graph, timings=timings)

@@ -1,0 +1,298 @@
+"""Regions, workspace patches, gates and singular boundaries of a field.
+
+Definitions (paper sections 2 to 4):
+
+* A *region* is a maximal set of 4-connected cells with the same number of
+  solutions whose solutions all continue from cell to cell
+  (:mod:`~rpr3_gwr_core.continuity`).  Regions are numbered 1..R by
+  decreasing number of cells (ties: lowest first cell), which reproduces the
+  numbering of the paper's figure 6.
+* Ill-conditioned cells.  Right on the singular locus a straight step between
+  two cells can cross a fold and come back, so a few cells there link to none
+  of their same-count neighbours and would form regions of one or two cells.
+  Rule: a connected set of fewer than ``min_region_cells`` cells (default 8,
+  far below the 100-cell smallest region of the paper's case) is part of the
+  singular locus: its cells get region 0 and belong to no patch, so no path
+  is planned through them.
+* A *patch* is one solution sheet over a region: the solutions of the region's
+  cells connected by continuation.  Its id is ``10 * region + layer``; layers
+  are numbered 1..n in the order of the sheets' orientations alpha at the
+  region's first cell (lowest flat index), taken in [-pi, pi) after the
+  sheets are sorted by aspect, negative first.  (With ten or more solutions
+  the scheme would clash; the 3-RPR has at most six.)
+* A *gate* joins two patches of different regions whose solutions continue
+  into each other across a face; a patch's *singular boundary* is the set of
+  its faces through which its solution does not continue (it vanishes into a
+  fold, or into the ill-conditioned cells above).  Faces on the edge of the
+  grid are neither.
+
+Patches are defined by the rotary disk search (``method="rds"``,
+:mod:`~rpr3_gwr_core.rotary_disk`).  The default ``method="components"``
+labels the same connected sets with ``scipy.sparse.csgraph`` and is tested to
+give identical patches, gates and boundaries.
+"""
+
+from dataclasses import dataclass, field as dataclass_field
+
+import numpy as np
+import scipy.sparse as sparse
+from scipy.sparse.csgraph import connected_components
+
+from .continuity import match_solutions, neighbour_pairs
+from .exceptions import InvalidInputError
+from .kinematics import MAX_SOLUTIONS
+from .rotary_disk import passage_from_links, rotary_disk_search
+
+__all__ = ["Patch", "Gate", "Segmentation", "segment"]
+
+METHODS = ("components", "rds")
+
+
+@dataclass(frozen=True, eq=False)
+class Patch:
+    """One workspace patch.
+
+    Attributes
+    ----------
+    id : int
+        ``10 * region + layer``.
+    region, layer : int
+    aspect : int
+        ``sign(det Jx)`` shared by all its solutions, +1 or -1.
+    n_solutions : int
+        Number of solutions of its region's cells.
+    cells : ndarray of int, shape (k,)
+        Flat indices of its cells, ascending.
+    slots : ndarray of int, shape (k,)
+        Which solution (index into the field's sorted solutions) of each cell.
+    gate_cells : ndarray of int
+        Its cells with a face that is a gate.
+    singular_cells : ndarray of int
+        Its cells with a face on its singular boundary.
+    """
+
+    id: int
+    region: int
+    layer: int
+    aspect: int
+    n_solutions: int
+    cells: np.ndarray
+    slots: np.ndarray
+    gate_cells: np.ndarray = dataclass_field(default_factory=lambda: np.zeros(0, int))
+    singular_cells: np.ndarray = dataclass_field(default_factory=lambda: np.zeros(0, int))
+
+
+@dataclass(frozen=True, eq=False)
+class Gate:
+    """The faces through which two patches continue into each other.
+
+    Attributes
+    ----------
+    patches : tuple of int
+        The two patch ids, ascending.
+    faces : ndarray of int, shape (k, 2)
+        Crossing faces as ``(cell of patches[0], cell of patches[1])``.
+    width : float
+        ``k * step`` [length unit].
+    """
+
+    patches: tuple
+    faces: np.ndarray
+    width: float
+
+
+@dataclass(frozen=True, eq=False)
+class Segmentation:
+    """Regions, patches and gates of an n-solution field.
+
+    Attributes
+    ----------
+    field : NSolutionField
+    region : ndarray of int32, shape (n_cells,)
+        Region id of each cell, 0 for none (no solution, or ill-conditioned).
+    patch : ndarray of int32, shape (n_cells, 6)
+        Patch id of each solution of each cell, 0 for none.
+    patches : dict of int to Patch
+    gates : dict of (int, int) to Gate
+    """
+
+    field: object
+    region: np.ndarray
+    patch: np.ndarray
+    patches: dict
+    gates: dict
+
+    @property
+    def n_regions(self):
+        """Number of regions R."""
+        return int(self.region.max(initial=0))
+
+
+def segment(field, method="components", min_region_cells=8):
+    """Split a field into regions, patches and gates.
+
+    Parameters
+    ----------
+    field : NSolutionField
+    method : {"components", "rds"}
+        How connected patches are found; both give the same result.
+    min_region_cells : int
+        Connected same-count sets smaller than this are singular locus.
+
+    Returns
+    -------
+    Segmentation
+    """
+    if method not in METHODS:
+        raise InvalidInputError(f"method must be one of {METHODS}, got {method!r}")
+    if int(min_region_cells) < 1:
+        raise InvalidInputError("min_region_cells must be at least 1")
+    links = [(lo, up, match_solutions(field, lo, up)) for lo, up in neighbour_pairs(field.grid.shape)]
+    region = _regions(field, links, int(min_region_cells))
+    disk_links = _within_region_links(field, region, links)
+    n_disks = field.grid.size * MAX_SOLUTIONS
+    valid = (field.valid & (region[:, None] > 0)).ravel()
+    if method == "rds":
+        component = _components_by_rds(valid, disk_links, len(field.grid.shape))
+    else:
+        component = _components_by_csgraph(valid, disk_links, n_disks)
+    patch = _number_patches(field, region, component)
+    patches = _describe_patches(field, region, patch, links)
+    gates = _gates(field, patch, links)
+    return Segmentation(field=field, region=region, patch=patch, patches=patches, gates=gates)
+
+
+def _regions(field, links, min_cells):
+    n = field.grid.size
+    count = field.count.astype(int)
+    rows, cols = [], []
+    for lo, up, match in links:
+        full = (count[lo] == count[up]) & (count[lo] > 0) & (
+            (match >= 0).sum(axis=1) == count[lo])
+        rows.append(lo[full])
+        cols.append(up[full])
+    rows, cols = np.concatenate(rows), np.concatenate(cols)
+    graph = sparse.coo_matrix((np.ones(rows.size, dtype=np.int8), (rows, cols)), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    occupied = count > 0
+    sizes = np.bincount(label[occupied], minlength=label.max() + 1)
+    first = np.full(sizes.size, n)
+    np.minimum.at(first, label[occupied], np.flatnonzero(occupied))
+    kept = np.flatnonzero(sizes >= min_cells)
+    kept = kept[np.lexsort((first[kept], -sizes[kept]))]
+    renumber = np.zeros(sizes.size, dtype=np.int32)
+    renumber[kept] = np.arange(1, kept.size + 1)
+    return np.where(occupied, renumber[label], 0).astype(np.int32)
+
+
+def _within_region_links(field, region, links):
+    """Per axis, the (lower, upper) disks linked inside one region."""
+    out = []
+    for lo, up, match in links:
+        rows, slots = np.nonzero(match >= 0)
+        same = (region[lo[rows]] == region[up[rows]]) & (region[lo[rows]] > 0)
+        rows, slots = rows[same], slots[same]
+        out.append((lo[rows] * MAX_SOLUTIONS + slots,
+                    up[rows] * MAX_SOLUTIONS + match[rows, slots].astype(np.int64)))
+    return out
+
+
+def _components_by_csgraph(valid, disk_links, n_disks):
+    rows = np.concatenate([lo for lo, _ in disk_links])
+    cols = np.concatenate([up for _, up in disk_links])
+    graph = sparse.coo_matrix((np.ones(rows.size, dtype=np.int8), (rows, cols)),
+                              shape=(n_disks, n_disks))
+    _, label = connected_components(graph, directed=False)
+    return np.where(valid, label, -1)
+
+
+def _components_by_rds(valid, disk_links, dimension):
+    passage = passage_from_links(valid.size, disk_links)
+    component = np.full(valid.size, -1, dtype=np.int64)
+    n = 0
+    for disk in np.flatnonzero(valid):
+        if component[disk] >= 0:
+            continue
+        visited, _ = rotary_disk_search(int(disk), passage, dimension)
+        component[visited] = n
+        n += 1
+    return component
+
+
+def _number_patches(field, region, component):
+    """Patch id of every disk from its component label (rule in module doc)."""
+    n_cells = field.grid.size
+    component = component.reshape(n_cells, MAX_SOLUTIONS)
+    patch = np.zeros((n_cells, MAX_SOLUTIONS), dtype=np.int32)
+    aspect = field.aspect
+    for r in range(1, int(region.max(initial=0)) + 1):
+        cells = np.flatnonzero(region == r)
+        labels = np.unique(component[cells][component[cells] >= 0])
+        reference = cells[0]
+        keys = []
+        for label in labels:
+            slots = np.flatnonzero(component[reference] == label)
+            if slots.size != 1:
+                raise RuntimeError(f"sheet {label} of region {r} covers its first cell "
+                                   f"{slots.size} times: region is not a trivial cover")
+            alpha = field.poses[reference, slots[0], 2]
+            keys.append((aspect[reference, slots[0]], alpha))
+        order = sorted(range(len(labels)), key=lambda k: keys[k])
+        for layer, k in enumerate(order, start=1):
+            patch[component == labels[k]] = 10 * r + layer
+    return patch
+
+
+def _describe_patches(field, region, patch, links):
+    gate_cells, singular_cells = {}, {}
+    shape_valid = field.valid
+    for lo, up, match in links:
+        for src, dst, forward in ((lo, up, match), (up, lo, _inverse(match))):
+            rows, slots = np.nonzero(shape_valid[src] & (patch[src] > 0))
+            own = patch[src[rows], slots]
+            target = forward[rows, slots].astype(np.int64)
+            continues = target >= 0
+            other = np.where(continues, patch[dst[rows], np.maximum(target, 0)], 0)
+            gate = continues & (other > 0) & (other != own)
+            singular = ~continues | (other == 0)
+            for pid, cell in zip(own[gate], src[rows][gate]):
+                gate_cells.setdefault(int(pid), set()).add(int(cell))
+            for pid, cell in zip(own[singular], src[rows][singular]):
+                singular_cells.setdefault(int(pid), set()).add(int(cell))
+    patches = {}
+    aspect = field.aspect
+    for pid in np.unique(patch[patch > 0]):
+        cells, slots = np.nonzero(patch == pid)
+        aspects = np.unique(aspect[cells, slots])
+        if aspects.size != 1:
+            raise RuntimeError(f"patch {pid} mixes aspects {aspects}")
+        pid = int(pid)
+        patches[pid] = Patch(
+            id=pid, region=pid // 10, layer=pid % 10, aspect=int(aspects[0]),
+            n_solutions=int(field.count[cells[0]]), cells=cells, slots=slots,
+            gate_cells=np.array(sorted(gate_cells.get(pid, ())), dtype=np.int64),
+            singular_cells=np.array(sorted(singular_cells.get(pid, ())), dtype=np.int64))
+    return patches
+
+
+def _inverse(match):
+    """Reverse a partial bijection ``match[k, i] = j`` into ``inverse[k, j] = i``."""
+    inverse = np.full_like(match, -1)
+    rows, slots = np.nonzero(match >= 0)
+    inverse[rows, match[rows, slots]] = slots
+    return inverse
+
+
+def _gates(field, patch, links):
+    faces = {}
+    for lo, up, match in links:
+        rows, slots = np.nonzero(match >= 0)
+        a = patch[lo[rows], slots]
+        b = patch[up[rows], match[rows, slots].astype(np.int64)]
+        crossing = (a > 0) & (b > 0) & (a // 10 != b // 10)
+        for pa, pb, ca, cb in zip(a[crossing], b[crossing], lo[rows][crossing], up[rows][crossing]):
+            key = (int(min(pa, pb)), int(max(pa, pb)))
+            faces.setdefault(key, []).append((ca, cb) if pa < pb else (cb, ca))
+    step = field.grid.step
+    return {key: Gate(patches=key, faces=np.array(sorted(v), dtype=np.int64), width=len(v) * step)
+            for key, v in sorted(faces.items())}
