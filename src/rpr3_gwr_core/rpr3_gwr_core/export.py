@@ -21,7 +21,10 @@ in the geometry's length unit and angles in radians::
         "poses": base64 of little-endian float64[n_cells, 6, 3] (NaN = none),
         "margin": base64 of little-endian float64[n_cells, 6],
         "region": base64 of little-endian int32[n_cells],
-        "patch": base64 of little-endian int32[n_cells, 6]
+        "patch": base64 of little-endian int32[n_cells, 6],
+        "links": [base64 of int8[n_faces_of_axis, 6], ...]  # per axis, faces in
+                 # row-major order of their lower cell: m[k, i] = j links solution
+                 # i of the lower cell to solution j of the upper one, -1 none
       }
     }
 
@@ -34,6 +37,7 @@ import json
 import networkx as nx
 import numpy as np
 
+from .continuity import neighbour_pairs
 from .exceptions import InvalidInputError
 from .field import Grid, NSolutionField
 from .geometry import Geometry
@@ -109,7 +113,8 @@ def roadmap_to_json(roadmap, include_field=True):
                          "poses": _encode(seg.field.poses, "<f8"),
                          "margin": _encode(seg.field.margin, "<f8"),
                          "region": _encode(seg.region, "<i4"),
-                         "patch": _encode(seg.patch, "<i4")}
+                         "patch": _encode(seg.patch, "<i4"),
+                         "links": [_encode(match, "<i1") for _, _, match in seg.links]}
     return json.dumps(data)
 
 
@@ -141,6 +146,11 @@ def roadmap_from_json(text):
             poses=_decode(raw["poses"], "<f8", (n, MAX_SOLUTIONS, 3)),
             margin=_decode(raw["margin"], "<f8", (n, MAX_SOLUTIONS)))
         region = _decode(raw["region"], "<i4", (n,)).astype(np.int32)
+        faces = neighbour_pairs(grid.shape)
+        if len(raw["links"]) != len(faces):
+            raise InvalidInputError("links do not match the grid's axes")
+        links = [(lo, up, _decode(text, "<i1", (lo.size, MAX_SOLUTIONS)))
+                 for (lo, up), text in zip(faces, raw["links"])]
         patch = _decode(raw["patch"], "<i4", (n, MAX_SOLUTIONS)).astype(np.int32)
         patches = {}
         for entry in data["patches"]:
@@ -158,7 +168,8 @@ def roadmap_from_json(text):
                               width=float(entry["width"]))
     except (KeyError, TypeError, ValueError) as exc:
         raise InvalidInputError(f"malformed roadmap document: {exc}") from exc
-    segmentation = Segmentation(field=field, region=region, patch=patch, patches=patches, gates=gates)
+    segmentation = Segmentation(field=field, region=region, patch=patch, patches=patches,
+                                gates=gates, links=links)
     return Roadmap(segmentation=segmentation, graph=roadmap_graph(segmentation), timings={})
 
 

@@ -82,6 +82,12 @@ class Grid:
         r2, r3 = np.meshgrid(self.rho2, self.rho3, indexing="ij")
         return np.stack([np.full(r2.size, self.rho1), r2.ravel(), r3.ravel()], axis=-1)
 
+    def rho_of(self, cell):
+        """(rho1, rho2, rho3) of one flat cell index, shape (3,) [length unit]."""
+        i, j = divmod(int(cell), self.shape[1])
+        return np.array([self.rho1, self.rho2_range[0] + self.step * i,
+                         self.rho3_range[0] + self.step * j])
+
     def cell_of(self, rho2, rho3):
         """Flat index of the cell nearest to (rho2, rho3).
 
@@ -99,6 +105,23 @@ class Grid:
                                      f"rho2 {self.rho2_range}, rho3 {self.rho3_range}")
             index.append(k)
         return index[0] * self.shape[1] + index[1]
+
+    def cells_of(self, rho2, rho3):
+        """Flat indices of the cells nearest to many points, -1 outside the grid.
+
+        Parameters
+        ----------
+        rho2, rho3 : ndarray, shape (n,)
+
+        Returns
+        -------
+        ndarray of int, shape (n,)
+        """
+        n2, n3 = self.shape
+        i = np.rint((np.asarray(rho2) - self.rho2_range[0]) / self.step).astype(np.int64)
+        j = np.rint((np.asarray(rho3) - self.rho3_range[0]) / self.step).astype(np.int64)
+        inside = (i >= 0) & (i < n2) & (j >= 0) & (j < n3)
+        return np.where(inside, i * n3 + j, -1)
 
     def to_dict(self):
         """Plain-data form, for JSON and cache keys."""

@@ -17,6 +17,7 @@ configurations; the roots come from the eigenvalues of a companion matrix in
 no root sits near ``t = inf``.
 """
 
+import functools
 import math
 
 import numpy as np
@@ -270,6 +271,7 @@ def _linear_terms(alpha, geometry):
     return big_a, big_b, big_c, big_d, big_e, big_f
 
 
+@functools.lru_cache(maxsize=16)
 def _basis_coefficients(geometry):
     """Fourier coefficients of the seven basis functions of equation (7).
 

@@ -114,6 +114,10 @@ class Segmentation:
         Patch id of each solution of each cell, 0 for none.
     patches : dict of int to Patch
     gates : dict of (int, int) to Gate
+    links : list of (ndarray, ndarray, ndarray)
+        Per grid axis, the face-adjacent cells ``(lower, upper)`` and the
+        continuation links of their solutions
+        (:func:`~rpr3_gwr_core.continuity.match_solutions`).
     """
 
     field: object
@@ -121,6 +125,7 @@ class Segmentation:
     patch: np.ndarray
     patches: dict
     gates: dict
+    links: list
 
     @property
     def n_regions(self):
@@ -159,7 +164,8 @@ def segment(field, method="components", min_region_cells=8):
     patch = _number_patches(field, region, component)
     patches = _describe_patches(field, region, patch, links)
     gates = _gates(field, patch, links)
-    return Segmentation(field=field, region=region, patch=patch, patches=patches, gates=gates)
+    return Segmentation(field=field, region=region, patch=patch, patches=patches, gates=gates,
+                        links=links)
 
 
 def _regions(field, links, min_cells):

@@ -1,0 +1,159 @@
+"""Global planning on the roadmap (paper section 3.1).
+
+Feasibility comes from the roadmap alone: two patches are connectible exactly
+when they lie in one connected component of the GWR.  At the grid's
+resolution this is a guarantee both ways: every path the roadmap connects is
+realised by the local planner, which crosses only gates.
+
+Global paths are the shortest sequences of patches (fewest gates, as in the
+paper, whose A* search is unweighted); all of them are returned, ranked by
+the weighted cost below.  The weighted mode ranks by that cost instead: for a
+gate between patches a and b, the distance in the (rho2, rho3) plane from a's
+centroid to the gate's midpoint and on to b's centroid, plus
+``narrow_penalty * step / width`` so that narrow gates cost more.
+"""
+
+from dataclasses import dataclass
+from itertools import islice
+
+import networkx as nx
+import numpy as np
+
+from .exceptions import InvalidInputError
+
+__all__ = ["Feasibility", "GlobalPath", "RoadmapIndex", "feasibility", "global_paths"]
+
+NARROW_PENALTY = 1.0
+
+
+@dataclass(frozen=True)
+class Feasibility:
+    """Whether a roadmap connects two patches.
+
+    Attributes
+    ----------
+    feasible : bool
+    reason : str
+        ``"same_patch"``, ``"connected"``, ``"other_aspect"`` (the patches
+        have different signs of det Jx, which no singularity-free motion
+        changes) or ``"unreachable"`` (same aspect, no chain of gates).
+    """
+
+    feasible: bool
+    reason: str
+
+
+@dataclass(frozen=True)
+class GlobalPath:
+    """A sequence of patch ids from the start's patch to the goal's.
+
+    Attributes
+    ----------
+    patches : tuple of int
+    cost : float
+        Sum of the weighted edge costs [length unit].
+    """
+
+    patches: tuple
+    cost: float
+
+
+class RoadmapIndex:
+    """Precomputed lookups of a roadmap for repeated global queries.
+
+    Parameters
+    ----------
+    roadmap : Roadmap
+    narrow_penalty : float
+        Weight of ``step / width`` in the weighted edge cost.
+    """
+
+    def __init__(self, roadmap, narrow_penalty=NARROW_PENALTY):
+        self.graph = roadmap.graph
+        self.component = {}
+        for label, nodes in enumerate(nx.connected_components(self.graph)):
+            for node in nodes:
+                self.component[node] = label
+        self.aspect = nx.get_node_attributes(self.graph, "aspect")
+        seg = roadmap.segmentation
+        grid = seg.field.grid
+        coords = grid.rho()[:, 1:]
+        self.centroid = {pid: coords[p.cells].mean(axis=0) for pid, p in seg.patches.items()}
+        self.weighted = nx.Graph()
+        self.weighted.add_nodes_from(self.graph.nodes)
+        for (a, b), gate in seg.gates.items():
+            middle = coords[gate.faces.ravel()].mean(axis=0)
+            cost = (np.linalg.norm(self.centroid[a] - middle) + np.linalg.norm(middle - self.centroid[b])
+                    + narrow_penalty * grid.step * grid.step / gate.width)
+            self.weighted.add_edge(a, b, cost=float(cost))
+
+    def path_cost(self, patches):
+        """Weighted cost of a sequence of patches [length unit]."""
+        return float(sum(self.weighted.edges[a, b]["cost"] for a, b in zip(patches, patches[1:])))
+
+    def heuristic(self, a, b):
+        """Straight-line distance between patch centroids (admissible for A*)."""
+        return float(np.linalg.norm(self.centroid[a] - self.centroid[b]))
+
+
+def _check(index, *patches):
+    for pid in patches:
+        if pid not in index.component:
+            raise InvalidInputError(f"patch {pid} is not in the roadmap")
+
+
+def feasibility(index, start_patch, goal_patch):
+    """Answer from the roadmap alone whether two patches are connectible.
+
+    Parameters
+    ----------
+    index : RoadmapIndex
+    start_patch, goal_patch : int
+
+    Returns
+    -------
+    Feasibility
+    """
+    _check(index, start_patch, goal_patch)
+    if start_patch == goal_patch:
+        return Feasibility(True, "same_patch")
+    if index.component[start_patch] == index.component[goal_patch]:
+        return Feasibility(True, "connected")
+    if index.aspect[start_patch] != index.aspect[goal_patch]:
+        return Feasibility(False, "other_aspect")
+    return Feasibility(False, "unreachable")
+
+
+def global_paths(index, start_patch, goal_patch, weighted=False, max_paths=8):
+    """Global paths between two patches, best first.
+
+    Parameters
+    ----------
+    index : RoadmapIndex
+    start_patch, goal_patch : int
+    weighted : bool
+        Rank by weighted cost (A* on edge costs, then the next simple paths
+        by Yen's algorithm) instead of returning every path with fewest gates.
+    max_paths : int
+        Most paths returned.
+
+    Returns
+    -------
+    list of GlobalPath
+        Empty when the patches are not connectible.
+    """
+    _check(index, start_patch, goal_patch)
+    if max_paths < 1:
+        raise InvalidInputError("max_paths must be at least 1")
+    if index.component[start_patch] != index.component[goal_patch]:
+        return []
+    if weighted:
+        best = nx.astar_path(index.weighted, start_patch, goal_patch,
+                             heuristic=index.heuristic, weight="cost")
+        others = nx.shortest_simple_paths(index.weighted, start_patch, goal_patch, weight="cost")
+        paths = [best] + [p for p in islice(others, max_paths) if p != best]
+    else:
+        paths = list(nx.all_shortest_paths(index.graph, start_patch, goal_patch))
+    ranked = sorted((GlobalPath(tuple(p), index.path_cost(p)) for p in paths),
+                    key=lambda g: (g.cost, g.patches))
+    return ranked[:max_paths]

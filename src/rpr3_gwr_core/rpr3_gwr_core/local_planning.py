@@ -1,0 +1,199 @@
+"""Local planning inside patches and stitching along a global path
+(paper section 3.3).
+
+Every cell of a patch costs ``1 + clearance_weight / d``, where ``d`` is its
+Euclidean distance in cells to the nearest cell outside the patch (singular
+edge, gate, other region or grid edge alike, as in the paper), so paths keep
+clear of every boundary until they must cross the planned gate.  Moving
+between 4-connected cells costs the step times the mean cost of the two.
+
+Rather than planning patch by patch to a chosen gate cell, the patches of a
+global path are stacked as layers of one directed graph: edges inside a layer
+are the patch's own continuation links, and the only edges between layers are
+the faces of the planned gate from layer k to layer k + 1.  One shortest-path
+search (Dijkstra, i.e. A* with a zero heuristic, in ``scipy.sparse.csgraph``)
+from the start cell to the goal cell of the last layer then gives the best
+stitched path: it crosses exactly the gates of the global path, in order, and
+never a singular boundary or another gate, because no other edge exists.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sparse
+from scipy.ndimage import distance_transform_edt
+from scipy.sparse.csgraph import dijkstra
+
+from .exceptions import InfeasiblePathError, InvalidInputError
+
+__all__ = ["LocalPlanner", "LocalPath", "DEFAULT_CLEARANCE_WEIGHT"]
+
+DEFAULT_CLEARANCE_WEIGHT = 10.0
+
+
+@dataclass(frozen=True)
+class LocalPath:
+    """A stitched cell path.
+
+    Attributes
+    ----------
+    cells : ndarray of int, shape (n,)
+        Flat cell indices from the start cell to the goal cell.
+    patches : ndarray of int, shape (n,)
+        The patch of each cell.
+    slots : ndarray of int, shape (n,)
+        The solution slot of each cell in its patch.
+    cost : float
+        Weighted length [length unit].
+    """
+
+    cells: np.ndarray
+    patches: np.ndarray
+    slots: np.ndarray
+    cost: float
+
+
+@dataclass(frozen=True)
+class _Profile:
+    cells: np.ndarray       # sorted flat cells of the patch
+    slots: np.ndarray       # solution slot of each
+    cost: np.ndarray        # clearance cost of each
+    lower: np.ndarray       # local indices of linked face pairs
+    upper: np.ndarray
+    weight: np.ndarray
+
+    def local(self, cells):
+        return np.searchsorted(self.cells, cells)
+
+
+class LocalPlanner:
+    """Cost-weighted planning on the 2D profiles of a roadmap's patches.
+
+    Parameters
+    ----------
+    roadmap : Roadmap
+    clearance_weight : float
+        ``w`` of the cell cost ``1 + w / d``; 0 gives shortest paths.
+    """
+
+    def __init__(self, roadmap, clearance_weight=DEFAULT_CLEARANCE_WEIGHT):
+        if not np.isfinite(clearance_weight) or clearance_weight < 0:
+            raise InvalidInputError("clearance_weight must be finite and non-negative")
+        self.segmentation = roadmap.segmentation
+        self.clearance_weight = float(clearance_weight)
+        self._profiles = {}
+        self._links = self._links_by_patch()
+
+    def _links_by_patch(self):
+        """Per patch, the (lower, upper) cells of its continuation links."""
+        seg = self.segmentation
+        found = {}
+        for lower, upper, match in seg.links:
+            rows, slots = np.nonzero(match >= 0)
+            a = seg.patch[lower[rows], slots]
+            b = seg.patch[upper[rows], match[rows, slots].astype(np.int64)]
+            keep = (a == b) & (a > 0)
+            pids, lo, up = a[keep], lower[rows][keep], upper[rows][keep]
+            order = np.argsort(pids, kind="stable")
+            pids, lo, up = pids[order], lo[order], up[order]
+            bounds = np.flatnonzero(np.diff(pids)) + 1
+            for chunk_p, chunk_lo, chunk_up in zip(np.split(pids, bounds), np.split(lo, bounds),
+                                                   np.split(up, bounds)):
+                if chunk_p.size:
+                    found.setdefault(int(chunk_p[0]), []).append((chunk_lo, chunk_up))
+        return {pid: (np.concatenate([lo for lo, _ in v]), np.concatenate([up for _, up in v]))
+                for pid, v in found.items()}
+
+    def profile(self, pid):
+        """The patch's cells, clearance costs and weighted links (cached)."""
+        if pid not in self._profiles:
+            self._profiles[pid] = self._build_profile(pid)
+        return self._profiles[pid]
+
+    def clearance(self, pid):
+        """Distance of each cell of a patch to its nearest outside cell [cells]."""
+        seg = self.segmentation
+        patch = seg.patches[pid]
+        shape = seg.field.grid.shape
+        mask = np.zeros(shape, dtype=bool)
+        mask.flat[patch.cells] = True
+        depth = distance_transform_edt(np.pad(mask, 1))[1:-1, 1:-1]
+        return depth.ravel()[patch.cells]
+
+    def _build_profile(self, pid):
+        patch = self.segmentation.patches[pid]
+        cost = 1.0 + self.clearance_weight / self.clearance(pid)
+        lower, upper = self._links.get(pid, (np.zeros(0, int), np.zeros(0, int)))
+        lower, upper = np.searchsorted(patch.cells, lower), np.searchsorted(patch.cells, upper)
+        weight = 0.5 * self.segmentation.field.grid.step * (cost[lower] + cost[upper])
+        return _Profile(cells=patch.cells, slots=patch.slots, cost=cost, lower=lower,
+                        upper=upper, weight=weight)
+
+    def plan(self, patches, start_cell, goal_cell):
+        """Best cell path from a start cell to a goal cell through given patches.
+
+        Parameters
+        ----------
+        patches : sequence of int
+            A global path: patch ids, consecutive ones joined by a gate.
+        start_cell, goal_cell : int
+            Flat cells of the first and the last patch.
+
+        Returns
+        -------
+        LocalPath
+
+        Raises
+        ------
+        InvalidInputError
+            If the cells are not in the end patches or two consecutive patches
+            share no gate.
+        InfeasiblePathError
+            If no path exists (a patch's profile is cut between its gates).
+        """
+        seg = self.segmentation
+        profiles = [self.profile(pid) for pid in patches]
+        for cell, profile, which in ((start_cell, profiles[0], "start"),
+                                     (goal_cell, profiles[-1], "goal")):
+            k = profile.local(cell)
+            if k >= profile.cells.size or profile.cells[k] != cell:
+                raise InvalidInputError(f"{which} cell {cell} is not in its patch")
+        offsets = np.cumsum([0] + [p.cells.size for p in profiles])
+        rows, cols, weights = [], [], []
+        for k, profile in enumerate(profiles):
+            rows += [profile.lower + offsets[k], profile.upper + offsets[k]]
+            cols += [profile.upper + offsets[k], profile.lower + offsets[k]]
+            weights += [profile.weight, profile.weight]
+        step = seg.field.grid.step
+        for k, (a, b) in enumerate(zip(patches, patches[1:])):
+            gate = seg.gates.get((min(a, b), max(a, b)))
+            if gate is None:
+                raise InvalidInputError(f"patches {a} and {b} share no gate")
+            cells_a, cells_b = (gate.faces[:, 0], gate.faces[:, 1]) if a < b else (
+                gate.faces[:, 1], gate.faces[:, 0])
+            la, lb = profiles[k].local(cells_a), profiles[k + 1].local(cells_b)
+            rows.append(la + offsets[k])
+            cols.append(lb + offsets[k + 1])
+            weights.append(0.5 * step * (profiles[k].cost[la] + profiles[k + 1].cost[lb]))
+        n = int(offsets[-1])
+        graph = sparse.csr_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))),
+                                  shape=(n, n))
+        source = int(profiles[0].local(start_cell))
+        target = int(offsets[-2] + profiles[-1].local(goal_cell))
+        distance, predecessor = dijkstra(graph, directed=True, indices=source,
+                                         return_predecessors=True)
+        if not np.isfinite(distance[target]):
+            raise InfeasiblePathError(f"no local path through patches {list(patches)}")
+        nodes = [target]
+        while nodes[-1] != source:
+            nodes.append(int(predecessor[nodes[-1]]))
+        nodes = np.array(nodes[::-1])
+        layer = np.searchsorted(offsets, nodes, side="right") - 1
+        cells = np.empty(nodes.size, dtype=np.int64)
+        slots = np.empty(nodes.size, dtype=np.int64)
+        for k, profile in enumerate(profiles):
+            here = layer == k
+            cells[here] = profile.cells[nodes[here] - offsets[k]]
+            slots[here] = profile.slots[nodes[here] - offsets[k]]
+        return LocalPath(cells=cells, patches=np.asarray(patches)[layer], slots=slots,
+                         cost=float(distance[target]))

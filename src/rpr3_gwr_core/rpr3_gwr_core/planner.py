@@ -1,0 +1,289 @@
+"""The hierarchical planner: locate, global path, local path, smoothing,
+timing and validation, for one roadmap.
+
+A :class:`Planner` precomputes the lookups of its roadmap once; each
+:meth:`Planner.plan` call then answers one request.  Every plan returned has
+passed :func:`~rpr3_gwr_core.validation.validate_path`; a plan that fails it
+is tried along the next global path, and is an error when none passes.
+"""
+
+from dataclasses import dataclass, field as dataclass_field
+import math
+
+import numpy as np
+
+from .exceptions import InfeasiblePathError, InvalidInputError, ValidationError
+from .global_planning import RoadmapIndex, feasibility, global_paths
+from .local_planning import DEFAULT_CLEARANCE_WEIGHT, LocalPlanner
+from .locate import DEFAULT_ALPHA_TOL, DEFAULT_MIN_MARGIN, locate
+from .trajectory import chaikin, shortcut, time_parameterize
+from .validation import DEFAULT_MAX_STEP, validate_path
+
+__all__ = ["PlanOptions", "Plan", "Planner"]
+
+# Smoothing keeps this many cells between the path and any patch boundary.
+_SMOOTH_CLEARANCE = 3.0
+_SAMPLES_PER_CELL = 5
+
+
+@dataclass(frozen=True)
+class PlanOptions:
+    """Options of one planning request.
+
+    Attributes
+    ----------
+    smooth : bool
+        Shortcut and round the path (kept only if it validates).
+    weighted : bool
+        Rank global paths by weighted cost instead of fewest gates.
+    feasibility_only : bool
+        Answer from the roadmap alone, without a trajectory.
+    max_velocity, max_acceleration : float or None
+        Joint limits [length unit / s, length unit / s**2]; both given means
+        the trajectory is time-parameterised.
+    alpha_tol : float
+        Tolerance on the start and goal orientations [rad].
+    max_paths : int
+        Most global paths reported.
+    """
+
+    smooth: bool = False
+    weighted: bool = False
+    feasibility_only: bool = False
+    max_velocity: float = None
+    max_acceleration: float = None
+    alpha_tol: float = DEFAULT_ALPHA_TOL
+    max_paths: int = 8
+
+    def __post_init__(self):
+        limits = (self.max_velocity, self.max_acceleration)
+        if (limits[0] is None) != (limits[1] is None):
+            raise InvalidInputError("give both max_velocity and max_acceleration, or neither")
+        for value in limits:
+            if value is not None and not (math.isfinite(value) and value > 0):
+                raise InvalidInputError(f"velocity and acceleration limits must be positive, got {value}")
+        if not (math.isfinite(self.alpha_tol) and self.alpha_tol > 0):
+            raise InvalidInputError(f"alpha_tol must be positive, got {self.alpha_tol}")
+        if int(self.max_paths) < 1:
+            raise InvalidInputError("max_paths must be at least 1")
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A planning answer.
+
+    Attributes
+    ----------
+    feasible : bool
+    reason : str
+        The feasibility reason (:class:`~rpr3_gwr_core.global_planning.Feasibility`).
+    start, goal : Location
+    global_paths : list of GlobalPath
+        Best first.
+    path_index : int
+        Which global path the trajectory follows (-1 without trajectory).
+    rho : ndarray, shape (n, 3)
+        Leg waypoints [length unit] (empty with ``feasibility_only``).
+    poses : ndarray, shape (n, 3)
+        Platform pose followed along them [length unit, length unit, rad].
+    patches : ndarray of int, shape (n,)
+        Patch of each waypoint.
+    times, velocities, accelerations : ndarray or None
+        Time parameterisation [s, length unit / s, length unit / s**2].
+    validation : Validation or None
+    smoothed : bool
+        Whether the smoothed path was kept.
+    """
+
+    feasible: bool
+    reason: str
+    start: object
+    goal: object
+    global_paths: list
+    path_index: int = -1
+    rho: np.ndarray = dataclass_field(default_factory=lambda: np.zeros((0, 3)))
+    poses: np.ndarray = dataclass_field(default_factory=lambda: np.zeros((0, 3)))
+    patches: np.ndarray = dataclass_field(default_factory=lambda: np.zeros(0, int))
+    times: np.ndarray = None
+    velocities: np.ndarray = None
+    accelerations: np.ndarray = None
+    validation: object = None
+    smoothed: bool = False
+
+    def to_dict(self):
+        """Plain-data form (the CLI's JSON)."""
+        out = {"feasible": self.feasible, "reason": self.reason,
+               "start": _location_dict(self.start), "goal": _location_dict(self.goal),
+               "global_paths": [list(g.patches) for g in self.global_paths],
+               "global_path_costs": [g.cost for g in self.global_paths],
+               "path_index": self.path_index, "smoothed": self.smoothed,
+               "waypoints": [{"rho": r.tolist(), "pose": p.tolist(), "patch": int(k)}
+                             for r, p, k in zip(self.rho, self.poses, self.patches)]}
+        if self.times is not None:
+            out["times"] = self.times.tolist()
+            out["velocities"] = self.velocities.tolist()
+            out["accelerations"] = self.accelerations.tolist()
+        if self.validation is not None:
+            out["validation"] = self.validation.as_dict()
+        return out
+
+
+def _location_dict(location):
+    return {"rho": location.rho.tolist(), "pose": location.pose.tolist(),
+            "patch": location.patch, "cell": location.cell, "margin": location.margin}
+
+
+class Planner:
+    """Plans on one roadmap.
+
+    Parameters
+    ----------
+    roadmap : Roadmap
+    clearance_weight : float
+        Local planner's boundary cost weight.
+    min_margin : float
+        Smallest normalised |det Jx| accepted at start, goal and along a plan.
+    max_step : float
+        Validator's continuation step [length unit].
+    """
+
+    def __init__(self, roadmap, clearance_weight=DEFAULT_CLEARANCE_WEIGHT,
+                 min_margin=DEFAULT_MIN_MARGIN, max_step=DEFAULT_MAX_STEP):
+        self.roadmap = roadmap
+        self.index = RoadmapIndex(roadmap)
+        self.local = LocalPlanner(roadmap, clearance_weight)
+        self.min_margin = float(min_margin)
+        self.max_step = float(max_step)
+        self._rho = roadmap.grid.rho()
+
+    def locate(self, configuration, alpha_tol=DEFAULT_ALPHA_TOL):
+        """:func:`~rpr3_gwr_core.locate.locate` of ``(rho1, rho2, rho3, alpha)``."""
+        configuration = tuple(configuration)
+        if len(configuration) != 4:
+            raise InvalidInputError("a configuration is (rho1, rho2, rho3, alpha)")
+        return locate(self.roadmap, *configuration, alpha_tol=alpha_tol,
+                      min_margin=self.min_margin)
+
+    def plan(self, start, goal, options=PlanOptions()):
+        """Plan from one configuration to another.
+
+        Parameters
+        ----------
+        start, goal : sequence of float
+            ``(rho1, rho2, rho3, alpha)`` [length unit x 3, rad].
+        options : PlanOptions
+
+        Returns
+        -------
+        Plan
+
+        Raises
+        ------
+        GWRError
+            ``InfeasiblePathError`` (with ``.reason``) when the roadmap has no
+            path, ``ValidationError`` when no path passes the validator, or
+            the locating errors of :func:`~rpr3_gwr_core.locate.locate`.
+        """
+        s = self.locate(start, options.alpha_tol)
+        g = self.locate(goal, options.alpha_tol)
+        answer = feasibility(self.index, s.patch, g.patch)
+        if not answer.feasible:
+            error = InfeasiblePathError(
+                f"no path from patch {s.patch} to patch {g.patch}: {answer.reason.replace('_', ' ')}")
+            error.reason = answer.reason
+            raise error
+        paths = global_paths(self.index, s.patch, g.patch, options.weighted, options.max_paths)
+        if options.feasibility_only:
+            return Plan(True, answer.reason, s, g, paths)
+        failures = []
+        for k, path in enumerate(paths):
+            local = self.local.plan(path.patches, s.cell, g.cell)
+            rho, patches = self._waypoints(s, g, local)
+            result = validate_path(self.roadmap.geometry, rho, s.pose, g.pose,
+                                   self.min_margin, self.max_step)
+            smoothed = False
+            if result.ok and options.smooth and len(rho) > 2:
+                rho_s, patches_s = self._smooth(rho, patches, local)
+                result_s = validate_path(self.roadmap.geometry, rho_s, s.pose, g.pose,
+                                         self.min_margin, self.max_step)
+                if result_s.ok:
+                    rho, patches, result, smoothed = rho_s, patches_s, result_s, True
+            if not result.ok:
+                failures.append(f"path {list(path.patches)}: {result.reason}")
+                continue
+            timing = (None, None, None)
+            if options.max_velocity is not None:
+                timing = time_parameterize(rho, options.max_velocity, options.max_acceleration)
+            return Plan(True, answer.reason, s, g, paths, path_index=k, rho=rho,
+                        poses=result.poses, patches=patches, times=timing[0],
+                        velocities=timing[1], accelerations=timing[2], validation=result,
+                        smoothed=smoothed)
+        raise ValidationError("no global path gave a valid trajectory: " + "; ".join(failures))
+
+    def _waypoints(self, s, g, local):
+        """Exact start, the cell centres, exact goal; repeated points dropped."""
+        rho = np.vstack([s.rho, self._rho[local.cells], g.rho])
+        patches = np.concatenate([[s.patch], local.patches, [g.patch]])
+        keep = np.ones(len(rho), dtype=bool)
+        keep[1:] = np.any(np.abs(np.diff(rho, axis=0)) > 1e-12, axis=1)
+        return rho[keep], patches[keep]
+
+    def _smooth(self, rho, patches, local):
+        """Shortcut inside each patch, then round the corners.
+
+        A shortcut or a rounded corner must keep ``_SMOOTH_CLEARANCE`` cells from
+        the patch boundary and must not pass over a cell whose solution is
+        closer to singular than the worst cell of the stretch it replaces.
+        """
+        seg = self.roadmap.segmentation
+        grid = seg.field.grid
+        clearance = {pid: self.local.clearance(pid) for pid in np.unique(patches)}
+        cells_of = {pid: seg.patches[pid].cells for pid in clearance}
+
+        def depth(pid, cells):
+            k = np.searchsorted(cells_of[pid], cells)
+            k = np.minimum(k, cells_of[pid].size - 1)
+            inside = cells_of[pid][k] == cells
+            return np.where(inside, clearance[pid][k], 0.0)
+
+        def patch_margin(pid, cells):
+            member = seg.patch[cells] == pid
+            slots = np.argmax(member, axis=1)
+            return np.where(member.any(axis=1), np.abs(seg.field.margin[cells, slots]), 0.0)
+
+        path_cells = grid.cells_of(rho[:, 1], rho[:, 2])
+        path_margin = np.array([patch_margin(pid, np.array([c]))[0]
+                                for pid, c in zip(patches, path_cells)])
+
+        def clear(a, b, pid, floor):
+            span = np.max(np.abs(b[1:] - a[1:])) / grid.step
+            t = np.linspace(0.0, 1.0, max(2, int(span * _SAMPLES_PER_CELL)))
+            points = a[1:] * (1 - t)[:, None] + b[1:] * t[:, None]
+            cells = grid.cells_of(points[:, 0], points[:, 1])
+            if np.any(cells < 0):
+                return False
+            # Full clearance along the segment; near its ends, which are
+            # already on the path, being inside the patch is enough.
+            from_ends = np.minimum(t, 1 - t) * span
+            need = np.where(from_ends < 1.5, 1.0, _SMOOTH_CLEARANCE)
+            return bool(np.all(depth(pid, cells) >= need)
+                        and np.all(patch_margin(pid, cells) >= floor))
+
+        def allowed(i, j):
+            return bool(np.all(patches[i:j + 1] == patches[i])) and clear(
+                rho[i], rho[j], patches[i], path_margin[i:j + 1].min())
+
+        keep = shortcut(rho[:, 1:], allowed)
+        rho_k, patches_k = rho[keep], patches[keep]
+        # Round each patch's stretch separately so gate crossings stay in
+        # place, and only where the rounded corners keep their clearance.
+        pieces, owners = [], []
+        bounds = np.flatnonzero(np.diff(patches_k)) + 1
+        floors = np.minimum.reduceat(path_margin[keep], np.concatenate([[0], bounds]))
+        for piece, owner, floor in zip(np.split(rho_k, bounds), np.split(patches_k, bounds), floors):
+            rounded = chaikin(piece)
+            if not all(clear(a, b, owner[0], floor) for a, b in zip(rounded, rounded[1:])):
+                rounded = piece
+            pieces.append(rounded)
+            owners.append(np.full(len(rounded), owner[0]))
+        return np.vstack(pieces), np.concatenate(owners)
