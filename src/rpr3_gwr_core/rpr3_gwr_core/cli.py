@@ -6,23 +6,33 @@ Subcommands::
     rpr3-gwr roadmap [--rho1 17] [--rho2 MIN MAX] [--rho3 MIN MAX] [--step 0.125]
                      [--method components|rds] [-o FILE] [--gexf FILE]
                      [--field-figure FILE] [--roadmap-figure FILE]
+    rpr3-gwr plan --rho1 17 --start RHO2 RHO3 ALPHA_DEG --goal RHO2 RHO3 ALPHA_DEG
+                  [--smooth] [--weighted] [--feasibility-only]
+                  [--max-velocity V --max-acceleration A] [-o FILE]
+    rpr3-gwr plot PLAN.json [-o FIGURE]
 
 Results go to stdout as JSON; bad arguments exit with code 2 and one line on
-stderr; progress is shown on stderr when it is a terminal.
+stderr; a plan that cannot be made prints an ``error`` object with a code and
+a message and exits with 1; progress is shown on stderr when it is a terminal.
+``plan`` and ``plot`` keep built roadmaps in the cache of
+:mod:`~rpr3_gwr_core.cache` (``--cache-dir``).
 """
 
 import argparse
 import json
 import math
+import os
 import sys
 import time
 
 import numpy as np
 
-from .exceptions import GWRError
+from .cache import cached_roadmap, default_cache_dir
+from .exceptions import GWRError, InvalidInputError
 from .field import Grid
-from .geometry import PAPER_GEOMETRY
+from .geometry import PAPER_GEOMETRY, Geometry
 from .kinematics import aspect, direct_kinematics
+from .planner import PlanOptions, Planner
 from .roadmap import build_roadmap
 
 __all__ = ["main"]
@@ -59,6 +69,28 @@ def _parser():
     roadmap.add_argument("--gexf", help="write the roadmap graph as GEXF here")
     roadmap.add_argument("--field-figure", help="write the n-solution field figure here (PNG, PDF, SVG)")
     roadmap.add_argument("--roadmap-figure", help="write the roadmap graph figure here")
+    plan = sub.add_parser("plan", help="plan a singularity-free path between two configurations")
+    plan.add_argument("--rho1", type=_finite, default=17.0)
+    plan.add_argument("--start", type=_finite, nargs=3, required=True,
+                      metavar=("RHO2", "RHO3", "ALPHA_DEG"))
+    plan.add_argument("--goal", type=_finite, nargs=3, required=True,
+                      metavar=("RHO2", "RHO3", "ALPHA_DEG"))
+    plan.add_argument("--smooth", action="store_true", help="shortcut and round the path")
+    plan.add_argument("--weighted", action="store_true", help="rank global paths by weighted cost")
+    plan.add_argument("--feasibility-only", action="store_true",
+                      help="answer from the roadmap alone, without a trajectory")
+    plan.add_argument("--max-velocity", type=_finite, help="joint speed limit [length unit/s]")
+    plan.add_argument("--max-acceleration", type=_finite,
+                      help="joint acceleration limit [length unit/s^2]")
+    plan.add_argument("--alpha-tol-deg", type=_finite, default=1.0,
+                      help="tolerance on the start and goal orientations [deg]")
+    plan.add_argument("-o", "--output", help="also write the JSON here")
+    plan.add_argument("--cache-dir", help="roadmap cache (default: %(default)s)",
+                      default=default_cache_dir())
+    plot = sub.add_parser("plot", help="draw a plan written by 'rpr3-gwr plan'")
+    plot.add_argument("plan_file", metavar="PLAN.json")
+    plot.add_argument("-o", "--output", help="figure file (default: PLAN.png beside the plan)")
+    plot.add_argument("--cache-dir", default=default_cache_dir())
     return parser
 
 
@@ -111,19 +143,66 @@ def _roadmap(args):
     return summary
 
 
+def _plan(args):
+    grid = Grid(rho1=args.rho1)
+    roadmap, _ = cached_roadmap(PAPER_GEOMETRY, grid, args.cache_dir, _Progress(sys.stderr))
+    options = PlanOptions(smooth=args.smooth, weighted=args.weighted,
+                          feasibility_only=args.feasibility_only,
+                          max_velocity=args.max_velocity, max_acceleration=args.max_acceleration,
+                          alpha_tol=math.radians(args.alpha_tol_deg))
+    start = (args.rho1, args.start[0], args.start[1], math.radians(args.start[2]))
+    goal = (args.rho1, args.goal[0], args.goal[1], math.radians(args.goal[2]))
+    header = {"roadmap": {"geometry": PAPER_GEOMETRY.to_dict(), "grid": grid.to_dict()},
+              "request": {"start": list(start), "goal": list(goal)}}
+    begin = time.perf_counter()
+    try:
+        result = dict(header, **Planner(roadmap).plan(start, goal, options).to_dict())
+        code = 0
+    except GWRError as exc:
+        result = dict(header, feasible=False, reason=getattr(exc, "reason", exc.code.lower()),
+                      error={"code": exc.code, "message": str(exc)})
+        code = 1
+    result["plan_time_s"] = time.perf_counter() - begin
+    if args.output:
+        with open(args.output, "w", encoding="utf-8") as out:
+            json.dump(result, out)
+    return result, code
+
+
+def _plot(args):
+    from .figures import plan_figure
+
+    with open(args.plan_file, encoding="utf-8") as stream:
+        try:
+            plan = json.load(stream)
+            geometry = Geometry.from_dict(plan["roadmap"]["geometry"])
+            grid = Grid.from_dict(plan["roadmap"]["grid"])
+        except (json.JSONDecodeError, KeyError, TypeError) as exc:
+            raise InvalidInputError(f"{args.plan_file} is not a plan written by 'rpr3-gwr plan'"
+                                    f" ({exc})") from None
+    if "error" in plan or not plan.get("waypoints"):
+        raise InvalidInputError(f"{args.plan_file} holds no trajectory to draw")
+    roadmap, _ = cached_roadmap(geometry, grid, args.cache_dir, _Progress(sys.stderr))
+    output = args.output or os.path.splitext(args.plan_file)[0] + ".png"
+    plan_figure(roadmap, plan).savefig(output, dpi=110)
+    return {"figure": output}, 0
+
+
 def main(argv=None):
     """Entry point of ``rpr3-gwr``; returns the process exit code."""
     parser = _parser()
     args = parser.parse_args(argv)
+    commands = {"dk": lambda a: (_dk(a), 0), "roadmap": lambda a: (_roadmap(a), 0),
+                "plan": _plan, "plot": _plot}
     try:
-        result = _dk(args) if args.command == "dk" else _roadmap(args)
+        result, code = commands[args.command](args)
     except GWRError as exc:
         parser.exit(2, f"{parser.prog}: error: {exc}\n")
     except OSError as exc:
         parser.exit(2, f"{parser.prog}: error: {exc.strerror}: {exc.filename}\n")
     json.dump(result, sys.stdout, indent=1)
     sys.stdout.write("\n")
-    return 0
+    return code
 
 
 if __name__ == "__main__":

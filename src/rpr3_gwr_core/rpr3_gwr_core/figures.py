@@ -9,7 +9,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from scipy.ndimage import distance_transform_cdt
 
-__all__ = ["field_figure", "roadmap_figure"]
+__all__ = ["field_figure", "roadmap_figure", "plan_figure"]
 
 
 def field_figure(roadmap):
@@ -88,4 +88,54 @@ def roadmap_figure(roadmap, seed=0):
     ax.set_title(rf"global workspace roadmap, $\rho_1$ = {roadmap.grid.rho1:g} "
                  "(red: det Jx > 0, blue: det Jx < 0)")
     ax.set_axis_off()
+    return fig
+
+
+def plan_figure(roadmap, plan, sheet_stride=6):
+    """A planned path over the field and in (rho2, rho3, alpha), as the
+    paper's figures 11 to 13.
+
+    Parameters
+    ----------
+    roadmap : Roadmap
+    plan : dict
+        :meth:`~rpr3_gwr_core.planner.Plan.to_dict` output.
+    sheet_stride : int
+        Draw every n-th cell of the traversed patches in the 3-D view.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    seg = roadmap.segmentation
+    grid = seg.field.grid
+    rho = np.array([w["rho"] for w in plan["waypoints"]]).reshape(-1, 3)
+    pose = np.array([w["pose"] for w in plan["waypoints"]]).reshape(-1, 3)
+    fig = Figure(figsize=(13, 6))
+    ax = fig.add_subplot(1, 2, 1)
+    region = seg.region.reshape(grid.shape).astype(float)
+    region[region == 0] = np.nan
+    extent = (grid.rho2[0], grid.rho2[-1], grid.rho3[0], grid.rho3[-1])
+    ax.imshow(region.T, origin="lower", extent=extent, cmap="Pastel1", interpolation="nearest")
+    ax.plot(rho[:, 1], rho[:, 2], "k-", lw=1.5)
+    ax.plot(rho[:1, 1], rho[:1, 2], "go", ms=8, label="start")
+    ax.plot(rho[-1:, 1], rho[-1:, 2], "r*", ms=12, label="goal")
+    ax.set_xlabel(r"$\rho_2$")
+    ax.set_ylabel(r"$\rho_3$")
+    paths = plan.get("global_paths") or [[]]
+    chosen = paths[max(plan.get("path_index", 0), 0)]
+    ax.set_title("global path " + " → ".join(str(p) for p in chosen))
+    ax.legend(loc="upper left")
+    ax3 = fig.add_subplot(1, 2, 2, projection="3d")
+    for pid in sorted(set(chosen)):
+        patch = seg.patches[pid]
+        cells, slots = patch.cells[::sheet_stride], patch.slots[::sheet_stride]
+        r = grid.rho()[cells] if cells.size else np.zeros((0, 3))
+        ax3.scatter(r[:, 1], r[:, 2], seg.field.poses[cells, slots, 2], s=1, alpha=0.25,
+                    label=str(pid))
+    ax3.plot(rho[:, 1], rho[:, 2], pose[:, 2], "k-", lw=2)
+    ax3.set_xlabel(r"$\rho_2$")
+    ax3.set_ylabel(r"$\rho_3$")
+    ax3.set_zlabel(r"$\alpha$ [rad]")
+    ax3.legend(loc="upper left", markerscale=8, title="patch")
     return fig

@@ -169,6 +169,15 @@ def _solve_rows(rows, r1, r2, r3):
     return np.stack([dx, dy, da], axis=-1)
 
 
+def serial_jacobian(rho):
+    """The serial Jacobian ``Jq = diag(2 rho)``, shape (..., 3, 3).
+
+    Its determinant ``8 rho1 rho2 rho3`` vanishes only with a zero leg.
+    """
+    rho = _as_rho(rho)
+    return 2.0 * rho[..., :, None] * np.eye(3)
+
+
 def singularity_margin(pose, geometry=PAPER_GEOMETRY):
     """Signed, normalised distance from a parallel singularity.
 
@@ -429,7 +438,12 @@ def _solve(rho, geometry):
         candidate[~regular] = _degenerate_poses(
             r[~regular], a[~regular], cols[~regular], alpha[rows[~regular]],
             big_a[~regular], big_b[~regular], g[~regular], geometry)
-    poses[rows, cols] = _newton(candidate, r, geometry, 2)
+    if not np.all(regular):
+        # The circle construction is only a first guess; Newton is safe here
+        # because a degenerate orientation is not a singularity.  Regular
+        # roots keep the linear formula: next to a fold, Newton could wander.
+        candidate[~regular] = _newton(candidate[~regular], r[~regular], geometry, 3)
+    poses[rows, cols] = candidate
     poses[..., 2] = np.angle(np.exp(1j * poses[..., 2]))
     return np.isfinite(alpha).sum(axis=1).astype(np.uint8), poses
 

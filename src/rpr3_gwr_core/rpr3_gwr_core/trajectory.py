@@ -13,8 +13,8 @@ Timing is a velocity profile along the path's arc length s: the speed
 at each corner so that the change of joint velocity across it stays within
 half of ``max_acceleration``; forward and backward passes then bound the
 acceleration along the path, ``v dv/ds``, by the other half, starting and
-ending at rest.  A joint's acceleration is the sum of the two parts, so it
-stays within ``max_acceleration``.
+ending at rest.  Where the finite-difference joint acceleration at a waypoint
+still exceeds the limit, the speed there is lowered and the profile redone.
 """
 
 import math
@@ -94,7 +94,7 @@ def time_parameterize(rho_path, max_velocity, max_acceleration):
     Parameters
     ----------
     rho_path : ndarray, shape (n, 3)
-        Waypoints [length unit].
+        Waypoints [length unit], no two consecutive ones equal.
     max_velocity : float
         Largest joint speed [length unit / s].
     max_acceleration : float
@@ -105,10 +105,14 @@ def time_parameterize(rho_path, max_velocity, max_acceleration):
     times : ndarray, shape (n,)
         [s], starting at 0.
     velocities : ndarray, shape (n, 3)
-        Joint velocities at the waypoints [length unit / s].
+        Joint velocities at the waypoints [length unit / s]: differences of
+        the positions over the times (central inside, zero at the ends), so
+        they integrate back to the path and never exceed ``max_velocity``.
     accelerations : ndarray, shape (n, 3)
-        Joint accelerations at the waypoints [length unit / s**2], by finite
-        differences of the velocities.
+        Joint accelerations at the waypoints [length unit / s**2]: central
+        differences of the velocities (one-sided at the ends).  Where one
+        would exceed ``max_acceleration`` the speed there is lowered and the
+        profile recomputed, so all of them respect it.
     """
     if not (math.isfinite(max_velocity) and max_velocity > 0
             and math.isfinite(max_acceleration) and max_acceleration > 0):
@@ -119,33 +123,65 @@ def time_parameterize(rho_path, max_velocity, max_acceleration):
         return np.zeros(1), np.zeros((1, 3)), np.zeros((1, 3))
     delta = np.diff(rho_path, axis=0)
     length = np.linalg.norm(delta, axis=1)
-    direction = delta / np.where(length > 0, length, 1.0)[:, None]
-    # Speed cap per waypoint from the joint speed limit along the adjacent segments.
-    seg_cap = max_velocity / np.maximum(np.max(np.abs(direction), axis=1), 1e-12)
+    if np.any(length == 0):
+        raise InvalidInputError("consecutive waypoints must differ")
+    direction = delta / length[:, None]
     cap = np.full(n, np.inf)
-    cap[:-1] = np.minimum(cap[:-1], seg_cap)
-    cap[1:] = np.minimum(cap[1:], seg_cap)
+    for k in range(n - 1):
+        seg_cap = max_velocity / np.max(np.abs(direction[k]))
+        cap[k], cap[k + 1] = min(cap[k], seg_cap), min(cap[k + 1], seg_cap)
     turn = np.max(np.abs(direction[1:] - direction[:-1]), axis=1)
     span = 0.5 * (length[1:] + length[:-1])
-    with np.errstate(divide="ignore"):
-        cap[1:-1] = np.minimum(cap[1:-1], np.sqrt(0.5 * max_acceleration * span / turn))
-    cap[0] = cap[-1] = 0.0
     half = 0.5 * max_acceleration
-    speed = cap.copy()
-    for k in range(1, n):
-        speed[k] = min(speed[k], math.sqrt(speed[k - 1] ** 2 + 2 * half * length[k - 1]))
-    for k in range(n - 2, -1, -1):
-        speed[k] = min(speed[k], math.sqrt(speed[k + 1] ** 2 + 2 * half * length[k]))
-    mean = 0.5 * (speed[:-1] + speed[1:])
-    # A segment between two rests (speed 0 at both ends) takes the bang-bang time.
-    duration = np.where(mean > 0, length / np.where(mean > 0, mean, 1.0),
-                        2.0 * np.sqrt(length / half))
-    times = np.concatenate([[0.0], np.cumsum(duration)])
-    tangent = np.zeros((n, 3))
-    tangent[:-1] += direction
-    tangent[1:] += direction
-    norms = np.linalg.norm(tangent, axis=1)
-    tangent /= np.where(norms > 0, norms, 1.0)[:, None]
-    velocities = speed[:, None] * tangent
-    accelerations = np.gradient(velocities, times, axis=0) if n > 2 else np.zeros((n, 3))
+    with np.errstate(divide="ignore"):
+        cap[1:-1] = np.minimum(cap[1:-1], np.sqrt(half * span / turn))
+    cap[0] = cap[-1] = 0.0
+    for _ in range(_MAX_REFINEMENTS):
+        speed = _speed_profile(cap, length, half)
+        times = _times(speed, length, half)
+        velocities = _velocities(rho_path, times)
+        accelerations = _differences(velocities, times)
+        excess = np.max(np.abs(accelerations), axis=1) / max_acceleration
+        if np.all(excess <= 1.0):
+            break
+        # Lower the speed around each offending waypoint and try again.
+        over = np.flatnonzero(excess > 1.0)
+        for k in (over - 1, over, over + 1):
+            k = k[(k >= 0) & (k < n)]
+            cap[k] = np.minimum(cap[k], speed[k] / np.sqrt(np.maximum(excess[k], 1.0)) * 0.9)
     return times, velocities, accelerations
+
+
+_MAX_REFINEMENTS = 60
+
+
+def _speed_profile(cap, length, acceleration):
+    """Largest speeds under the caps with ``v dv/ds <= acceleration`` both ways."""
+    speed = cap.copy()
+    for k in range(1, len(speed)):
+        speed[k] = min(speed[k], math.sqrt(speed[k - 1] ** 2 + 2 * acceleration * length[k - 1]))
+    for k in range(len(speed) - 2, -1, -1):
+        speed[k] = min(speed[k], math.sqrt(speed[k + 1] ** 2 + 2 * acceleration * length[k]))
+    return speed
+
+
+def _times(speed, length, acceleration):
+    mean = 0.5 * (speed[:-1] + speed[1:])
+    # A segment between two rests takes the bang-bang time.
+    duration = np.where(mean > 0, length / np.where(mean > 0, mean, 1.0),
+                        2.0 * np.sqrt(length / acceleration))
+    return np.concatenate([[0.0], np.cumsum(duration)])
+
+
+def _velocities(positions, times):
+    out = np.zeros_like(positions)
+    out[1:-1] = (positions[2:] - positions[:-2]) / (times[2:] - times[:-2])[:, None]
+    return out
+
+
+def _differences(velocities, times):
+    out = np.empty_like(velocities)
+    out[1:-1] = (velocities[2:] - velocities[:-2]) / (times[2:] - times[:-2])[:, None]
+    out[0] = (velocities[1] - velocities[0]) / (times[1] - times[0])
+    out[-1] = (velocities[-1] - velocities[-2]) / (times[-1] - times[-2])
+    return out

@@ -1,0 +1,210 @@
+"""Planning on the paper's roadmap: its two examples, errors, and properties."""
+
+import math
+
+import networkx as nx
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings, strategies as st
+from scipy.optimize import brentq
+
+from rpr3_gwr_core.exceptions import (AssemblyModeError, InfeasiblePathError, InvalidInputError,
+                                      NoSolutionError, OutOfGridError, Rho1MismatchError,
+                                      SingularityError)
+from rpr3_gwr_core.field import Grid
+from rpr3_gwr_core.global_planning import feasibility, global_paths
+from rpr3_gwr_core.kinematics import inverse_kinematics, singularity_margin
+from rpr3_gwr_core.planner import PlanOptions, Planner
+from rpr3_gwr_core.roadmap import build_roadmap
+from rpr3_gwr_core.trajectory import chaikin, shortcut, time_parameterize
+from rpr3_gwr_core.validation import validate_path
+
+D = math.radians
+Q1, Q2 = (17, 12, 18, D(122.82)), (17, 10, 25, D(-24.24))
+MODE_A, MODE_B = (17, 20, 25, D(29.47)), (17, 20, 25, D(96.13))
+
+
+@pytest.fixture(scope="module")
+def planner(paper_roadmap):
+    return Planner(paper_roadmap)
+
+
+@pytest.fixture(scope="session")
+def paper_roadmap():
+    return build_roadmap()
+
+
+def regions(path):
+    return [p // 10 for p in path.patches]
+
+
+def test_first_example_has_exactly_the_papers_two_shortest_global_paths(planner):
+    plan = planner.plan(Q1, Q2)
+    assert plan.feasible
+    assert sorted(regions(g) for g in plan.global_paths) == [[6, 4, 2, 1], [6, 5, 2, 1]]
+    assert plan.start.patch // 10 == 6 and plan.goal.patch // 10 == 1
+
+
+def test_first_example_trajectory_crosses_exactly_the_planned_gates(planner, paper_roadmap):
+    plan = planner.plan(Q1, Q2)
+    chosen = plan.global_paths[plan.path_index].patches
+    visited = [int(p) for k, p in enumerate(plan.patches) if k == 0 or p != plan.patches[k - 1]]
+    assert tuple(visited) == chosen
+    assert plan.validation.ok and plan.validation.min_margin > 1e-3
+    np.testing.assert_allclose(plan.rho[0], Q1[:3])
+    np.testing.assert_allclose(plan.rho[-1], Q2[:3])
+    assert abs(plan.poses[-1, 2] - Q2[3]) < D(0.05)
+
+
+def test_assembly_mode_change_goes_through_regions_3_1_3(planner):
+    plan = planner.plan(MODE_A, MODE_B)
+    assert plan.start.patch != plan.goal.patch
+    assert plan.start.patch // 10 == plan.goal.patch // 10 == 3
+    assert regions(plan.global_paths[0]) == [3, 1, 3]
+    # Same legs at both ends, yet the followed platform ends in the other mode.
+    np.testing.assert_allclose(plan.rho[0], plan.rho[-1])
+    assert abs(plan.poses[0, 2] - MODE_A[3]) < D(0.05)
+    assert abs(plan.poses[-1, 2] - MODE_B[3]) < D(0.05)
+    assert plan.validation.ok
+
+
+def test_returned_trajectory_passes_an_independent_validation(planner, paper_roadmap):
+    for start, goal in ((Q1, Q2), (MODE_A, MODE_B)):
+        plan = planner.plan(start, goal, PlanOptions(smooth=True))
+        again = validate_path(paper_roadmap.geometry, plan.rho, plan.start.pose, plan.goal.pose,
+                              max_step=0.01)
+        assert again.ok, again.reason
+        np.testing.assert_allclose(inverse_kinematics(plan.poses), plan.rho, atol=1e-7)
+
+
+def test_smoothing_shortens_the_path_and_keeps_the_margin(planner):
+    raw = planner.plan(Q1, Q2)
+    smooth = planner.plan(Q1, Q2, PlanOptions(smooth=True))
+    assert smooth.smoothed
+    length = lambda p: np.sum(np.linalg.norm(np.diff(p.rho, axis=0), axis=1))
+    assert length(smooth) < length(raw)
+    assert smooth.validation.min_margin >= planner.min_margin
+
+
+def test_between_aspects_is_infeasible_from_the_roadmap_alone(planner):
+    start = planner.locate(Q1)
+    goal = planner.locate(MODE_A)
+    answer = feasibility(planner.index, start.patch, goal.patch)
+    assert not answer.feasible and answer.reason == "other_aspect"
+    assert global_paths(planner.index, start.patch, goal.patch) == []
+    with pytest.raises(InfeasiblePathError) as info:
+        planner.plan(Q1, MODE_A)
+    assert info.value.reason == "other_aspect"
+
+
+def test_feasibility_only_returns_paths_without_trajectory(planner):
+    plan = planner.plan(Q1, Q2, PlanOptions(feasibility_only=True))
+    assert plan.feasible and plan.rho.shape == (0, 3) and len(plan.global_paths) == 2
+
+
+def test_weighted_mode_ranks_by_cost(planner):
+    plan = planner.plan(Q1, Q2, PlanOptions(weighted=True))
+    costs = [g.cost for g in plan.global_paths]
+    assert costs == sorted(costs) and len(costs) >= 2
+    assert regions(plan.global_paths[0]) in ([6, 4, 2, 1], [6, 5, 2, 1])
+
+
+def test_start_equal_to_goal_is_a_one_point_trajectory(planner):
+    plan = planner.plan(Q1, Q1, PlanOptions(max_velocity=1.0, max_acceleration=1.0))
+    assert plan.rho.shape == (1, 3) and plan.times.tolist() == [0.0]
+
+
+def test_time_parameterisation_respects_the_limits(planner):
+    plan = planner.plan(Q1, Q2, PlanOptions(smooth=True, max_velocity=2.0, max_acceleration=4.0))
+    assert plan.times[0] == 0 and np.all(np.diff(plan.times) > 0)
+    assert np.max(np.abs(plan.velocities)) <= 2.0 + 1e-9
+    assert np.max(np.abs(plan.accelerations)) <= 4.0 + 1e-9
+    # Between waypoints the legs move at most at the limit too.
+    segment_speed = np.abs(np.diff(plan.rho, axis=0)) / np.diff(plan.times)[:, None]
+    assert np.max(segment_speed) <= 2.0 + 1e-9
+    np.testing.assert_array_equal(plan.velocities[[0, -1]], 0.0)
+
+
+@pytest.mark.parametrize("configuration, error", [
+    ((17, float("nan"), 18, 0.0), InvalidInputError),
+    ((17, 12, float("inf"), 0.0), InvalidInputError),
+    ((17, -1, 18, 0.0), InvalidInputError),
+    ((17, 60, 18, 0.0), OutOfGridError),
+    ((13, 12, 18, D(122.82)), Rho1MismatchError),
+    ((17, 2, 45, 0.0), NoSolutionError),
+    ((17, 12, 18, 0.0), AssemblyModeError),
+])
+def test_bad_configurations_raise_their_own_error(planner, configuration, error):
+    with pytest.raises(error):
+        planner.plan(configuration, Q2)
+
+
+def test_a_configuration_on_the_singular_locus_is_refused(planner):
+    # A pose with det(Jx) = 0 and rho1 = 17: turn B1 on leg 1's circle
+    # until the leg lines concur.
+    alpha = 0.5
+    on_circle = lambda t: [17 * math.cos(t), 17 * math.sin(t), alpha]
+    theta = brentq(lambda t: singularity_margin(on_circle(t)), math.pi / 3, math.pi / 2)
+    rho = inverse_kinematics(on_circle(theta))
+    assert rho[0] == pytest.approx(17)
+    with pytest.raises(SingularityError):
+        planner.locate((*rho, alpha))
+
+
+def test_invalid_options_are_refused():
+    with pytest.raises(InvalidInputError):
+        PlanOptions(max_velocity=1.0)
+    with pytest.raises(InvalidInputError):
+        PlanOptions(max_velocity=-1.0, max_acceleration=1.0)
+
+
+def _random_configuration(roadmap, draw):
+    seg = roadmap.segmentation
+    pid = draw(st.sampled_from(sorted(seg.patches)))
+    patch = seg.patches[pid]
+    k = draw(st.integers(0, patch.cells.size - 1))
+    cell, slot = patch.cells[k], patch.slots[k]
+    return (*roadmap.grid.rho_of(cell), float(seg.field.poses[cell, slot, 2])), pid
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_every_plan_validates_and_infeasible_only_without_roadmap_path(planner, paper_roadmap, data):
+    start, ps = _random_configuration(paper_roadmap, data.draw)
+    goal, pg = _random_configuration(paper_roadmap, data.draw)
+    connected = nx.has_path(paper_roadmap.graph, ps, pg)
+    try:
+        plan = planner.plan(start, goal)
+    except InfeasiblePathError:
+        assert not connected
+        return
+    assert connected
+    check = validate_path(paper_roadmap.geometry, plan.rho, plan.start.pose, plan.goal.pose)
+    assert check.ok, check.reason
+    assert np.all(np.sign(singularity_margin(plan.poses)) == check.aspect)
+
+
+def test_shortcut_keeps_the_ends_and_chaikin_keeps_the_endpoints():
+    points = np.array([[0, 0], [1, 0], [2, 0], [3, 0], [3, 1]], dtype=float)
+    keep = shortcut(points, lambda i, j: points[i, 1] == points[j, 1] or j - i == 1)
+    assert keep[0] == 0 and keep[-1] == 4 and len(keep) < 5
+    rounded = chaikin(points[keep])
+    np.testing.assert_allclose(rounded[0], points[0])
+    np.testing.assert_allclose(rounded[-1], points[-1])
+
+
+def test_time_parameterize_rejects_bad_limits():
+    with pytest.raises(InvalidInputError):
+        time_parameterize(np.zeros((2, 3)), 0.0, 1.0)
+
+
+def test_planner_works_on_another_rho1():
+    roadmap = build_roadmap(grid=Grid(rho1=13, step=0.25))
+    planner = Planner(roadmap)
+    seg = roadmap.segmentation
+    big = max(seg.patches.values(), key=lambda p: p.cells.size)
+    deep = np.flatnonzero(planner.local.clearance(big.id) >= 4)
+    ends = [(big.cells[k], big.slots[k]) for k in (deep[0], deep[-1])]
+    a, b = ((*roadmap.grid.rho_of(c), float(seg.field.poses[c, s, 2])) for c, s in ends)
+    plan = planner.plan(a, b)
+    assert plan.validation.ok and set(plan.patches.tolist()) == {big.id}
