@@ -9,6 +9,8 @@ import numpy as np
 from matplotlib.figure import Figure
 from scipy.ndimage import distance_transform_cdt
 
+from .roadmap import aspect_groups
+
 __all__ = ["field_figure", "roadmap_figure", "plan_figure"]
 
 
@@ -79,7 +81,11 @@ def roadmap_figure(roadmap, seed=0):
     graph = roadmap.graph
     fig = Figure(figsize=(7, 6))
     ax = fig.add_subplot()
-    layout = nx.spring_layout(graph, seed=seed, weight=None)
+    # One spring layout per aspect group, side by side, as the paper's figure 10.
+    layout = {}
+    for column, nodes in enumerate(aspect_groups(graph)):
+        part = nx.spring_layout(graph.subgraph(nodes), seed=seed, weight=None)
+        layout.update({n: xy + np.array([2.6 * column, 0.0]) for n, xy in part.items()})
     colors = ["tab:red" if graph.nodes[n]["aspect"] > 0 else "tab:blue" for n in graph.nodes]
     widths = [0.5 + 3.0 * graph.edges[e]["width"] / max(1e-9, max(
         (graph.edges[f]["width"] for f in graph.edges), default=1.0)) for e in graph.edges]
