@@ -1,0 +1,34 @@
+# Activation of the rpr3-gwr workspace:  source ros2_ws/env.sh
+# Puts the virtual environment (the ROS prefix when ROS comes from wheels) or
+# /opt/ros/jazzy, the built overlay and the loopback-only DDS settings in the
+# current shell.  Run ros2_ws/setup.sh (or make build) first.
+_rpr3_ws="$(cd "$(dirname "${BASH_SOURCE[0]:-$0}")" && pwd)"
+_rpr3_root="$(dirname "$_rpr3_ws")"
+if [ -f /opt/ros/jazzy/setup.bash ]; then
+  # shellcheck disable=SC1091
+  source /opt/ros/jazzy/setup.bash
+fi
+if [ ! -f "$_rpr3_root/.venv/bin/activate" ]; then
+  echo "rpr3-gwr: no .venv yet; run ros2_ws/setup.sh first" >&2
+  return 1 2>/dev/null || exit 1
+fi
+# shellcheck disable=SC1091
+source "$_rpr3_root/.venv/bin/activate"
+if [ ! -f /opt/ros/jazzy/setup.bash ]; then
+  # The wheels install ROS into the virtual environment itself.
+  export AMENT_PREFIX_PATH="$VIRTUAL_ENV${AMENT_PREFIX_PATH:+:$AMENT_PREFIX_PATH}"
+  export CMAKE_PREFIX_PATH="$VIRTUAL_ENV${CMAKE_PREFIX_PATH:+:$CMAKE_PREFIX_PATH}"
+fi
+if [ -f "$_rpr3_ws/install/setup.bash" ]; then
+  # shellcheck disable=SC1091
+  source "$_rpr3_ws/install/setup.bash"
+fi
+export RMW_IMPLEMENTATION=rmw_fastrtps_cpp
+export FASTRTPS_DEFAULT_PROFILES_FILE="$_rpr3_ws/fastdds_localhost.xml"
+export FASTDDS_DEFAULT_PROFILES_FILE="$_rpr3_ws/fastdds_localhost.xml"
+# With LOCALHOST, rmw_fastrtps replaces the profile's transports with its own
+# and opens sockets on other interfaces (seen with ss -uanp); the profile
+# alone keeps every socket on 127.0.0.1.
+unset ROS_AUTOMATIC_DISCOVERY_RANGE ROS_STATIC_PEERS
+export ROS_DOMAIN_ID="${ROS_DOMAIN_ID:-47}"
+unset _rpr3_ws _rpr3_root

