@@ -20,6 +20,9 @@ setup(
     entry_points={
         "console_scripts": [
             "roadmap_builder = rpr3_gwr_nodes.roadmap_builder:main",
+            "planner = rpr3_gwr_nodes.planner:main",
+            "rpr3_driver = rpr3_gwr_nodes.rpr3_driver:main",
+            "trajectory_recorder = rpr3_gwr_nodes.trajectory_recorder:main",
         ],
     },
 )

@@ -8,6 +8,7 @@ element), and come back with ``numpy.frombuffer``.
 import array
 
 import numpy as np
+from builtin_interfaces.msg import Duration
 from rpr3_gwr_core.continuity import neighbour_pairs
 from rpr3_gwr_core.exceptions import InvalidInputError
 from rpr3_gwr_core.field import Grid, NSolutionField
@@ -21,8 +22,14 @@ from rpr3_gwr_msgs.msg import Grid as GridMsg
 from rpr3_gwr_msgs.msg import NSolutionField as NSolutionFieldMsg
 from rpr3_gwr_msgs.msg import WorkspacePatch, WorkspaceRoadmap
 
-__all__ = ["geometry_to_msg", "geometry_from_msg", "grid_to_msg", "grid_from_msg",
+__all__ = ["duration_msg", "geometry_to_msg", "geometry_from_msg", "grid_to_msg", "grid_from_msg",
            "roadmap_to_msgs", "roadmap_from_msgs"]
+
+
+def duration_msg(seconds):
+    """A builtin_interfaces/Duration of a non-negative number of seconds."""
+    nanoseconds = int(round(seconds * 1e9))
+    return Duration(sec=nanoseconds // 1_000_000_000, nanosec=nanoseconds % 1_000_000_000)
 
 
 def _pack(typecode, values, dtype):

@@ -1,0 +1,115 @@
+"""Malformed input raises the package's own errors."""
+
+import math
+
+import numpy as np
+import pytest
+
+from rpr3_gwr_core.exceptions import GWRError, InvalidInputError, OutOfGridError
+from rpr3_gwr_core.field import Grid, compute_field
+from rpr3_gwr_core.geometry import Geometry, beta_from_sides
+from rpr3_gwr_core.kinematics import direct_kinematics, direct_kinematics_batch, inverse_kinematics
+from rpr3_gwr_core.rotary_disk import rotary_order
+from rpr3_gwr_core.segmentation import segment
+
+NAN, INF = math.nan, math.inf
+
+
+def test_invalid_input_error_is_a_gwr_error_and_a_value_error():
+    assert issubclass(InvalidInputError, GWRError)
+    assert issubclass(InvalidInputError, ValueError)
+    assert issubclass(OutOfGridError, GWRError)
+
+
+@pytest.mark.parametrize("pose", [[NAN, 1.0, 0.0], [1.0, INF, 0.0], [1.0, 2.0, -INF],
+                                  [1.0, 2.0], [1.0, 2.0, 3.0, 4.0], [[1.0, 2.0], [3.0, 4.0]]])
+def test_inverse_kinematics_rejects_bad_poses(pose):
+    with pytest.raises(InvalidInputError):
+        inverse_kinematics(np.array(pose))
+
+
+@pytest.mark.parametrize("rho", [[NAN, 12.0, 18.0], [17.0, INF, 18.0], [17.0, 12.0, -18.0],
+                                 [17.0, 12.0], [17.0, 12.0, 18.0, 1.0], [[17.0, 12.0, 18.0]]])
+def test_direct_kinematics_rejects_bad_legs(rho):
+    with pytest.raises(InvalidInputError):
+        direct_kinematics(np.array(rho))
+
+
+@pytest.mark.parametrize("rho", [[17.0, 12.0, 18.0], [[[17.0, 12.0, 18.0]]], [[-1.0, 2.0, 3.0]]])
+def test_direct_kinematics_batch_rejects_bad_shapes_and_values(rho):
+    with pytest.raises(InvalidInputError):
+        direct_kinematics_batch(np.array(rho))
+
+
+@pytest.mark.parametrize("kwargs", [
+    {"rho1": NAN}, {"rho1": INF}, {"rho1": -1.0}, {"rho1": 0.0},
+    {"step": 0.0}, {"step": -0.125}, {"step": NAN},
+    {"rho2_range": (-1.0, 5.0)}, {"rho3_range": (5.0, 1.0)}, {"rho2_range": (0.0, INF)},
+    {"rho2_range": (0.0,)}, {"rho3_range": (0.0, 1.0, 2.0)}, {"rho1": "17"},
+])
+def test_grid_rejects_bad_values(kwargs):
+    with pytest.raises(InvalidInputError):
+        Grid(**kwargs)
+
+
+@pytest.mark.parametrize("kwargs", [
+    {"a2": (NAN, 0.0)}, {"a3": (0.0, INF)}, {"a1": (0.0, 0.0, 0.0)}, {"a1": (1.0,)},
+    {"d1": -1.0}, {"d3": 0.0}, {"d1": NAN}, {"beta": INF}, {"beta": 0.0},
+])
+def test_geometry_rejects_bad_values(kwargs):
+    with pytest.raises(InvalidInputError):
+        Geometry(**kwargs)
+
+
+@pytest.mark.xfail(strict=True, reason="BUG: Geometry(beta=pi) (a flat platform) is accepted: "
+                   "abs(sin(pi)) = 1.2e-16 passes the 'not flat' check")
+def test_geometry_rejects_a_flat_platform_at_pi():
+    with pytest.raises(InvalidInputError):
+        Geometry(beta=math.pi)
+
+
+@pytest.mark.xfail(strict=True, reason="BUG: a scalar base point raises TypeError, "
+                   "not InvalidInputError")
+def test_geometry_rejects_a_scalar_base_point():
+    with pytest.raises(InvalidInputError):
+        Geometry(a2=5.0)
+
+
+@pytest.mark.parametrize("sides", [(1.0, 5.0, 1.0), (0.0, 1.0, 1.0), (NAN, 1.0, 1.0),
+                                   (1.0, 2.0, 1.0)])
+def test_beta_from_sides_rejects_non_triangles(sides):
+    with pytest.raises(InvalidInputError):
+        beta_from_sides(*sides)
+
+
+@pytest.mark.parametrize("point", [(-0.3, 10.0), (10.0, -0.3), (50.3, 10.0), (10.0, 60.0)])
+def test_cell_of_outside_the_grid_raises_out_of_grid(point):
+    with pytest.raises(OutOfGridError):
+        Grid(step=0.5).cell_of(*point)
+
+
+@pytest.mark.xfail(strict=True, reason="BUG: cell_of(NaN/inf) raises a bare ValueError / "
+                   "OverflowError from int(round(...)), not a GWRError")
+@pytest.mark.parametrize("point", [(NAN, 10.0), (10.0, INF)])
+def test_cell_of_non_finite_raises_a_gwr_error(point):
+    with pytest.raises(GWRError):
+        Grid(step=0.5).cell_of(*point)
+
+
+def _tiny_field():
+    return compute_field(grid=Grid(rho2_range=(10.0, 12.0), rho3_range=(20.0, 22.0), step=1.0))
+
+
+def test_segment_rejects_an_unknown_method():
+    with pytest.raises(InvalidInputError):
+        segment(_tiny_field(), method="bogus")
+
+
+def test_segment_rejects_min_region_cells_below_one():
+    with pytest.raises(InvalidInputError):
+        segment(_tiny_field(), min_region_cells=0)
+
+
+def test_rotary_order_rejects_dimension_zero():
+    with pytest.raises(InvalidInputError):
+        rotary_order(0)

@@ -1,0 +1,111 @@
+"""trajectory_recorder: records planned paths (and, on request, the driver's
+joint states) to a rosbag2 bag.
+
+Messages are taken serialized from DDS (``raw=True``) and written unchanged,
+by a thread of its own (the storage may only be used by the thread that
+opened it, whatever executor spins the node), with the ``rosbags`` library, so ``ros2 bag info`` and ``ros2 bag play`` of a
+full Jazzy install read the bag (format version 9, sqlite3 or MCAP storage,
+with metadata.yaml).  The bag is closed, and its metadata written, when the
+node is destroyed: on SIGINT too, since ``main`` destroys the node in
+``finally``.
+
+Parameters: ``bag_path`` (default ``rpr3_gwr_bags/<date>_<time>``),
+``storage`` (``sqlite3`` or ``mcap``), ``record_joint_states`` (bool).
+"""
+
+import datetime
+import pathlib
+import queue
+import threading
+
+import rclpy
+from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import qos_profile_sensor_data
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.typesys import Stores, get_typestore
+from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectory
+
+__all__ = ["TrajectoryRecorder", "main"]
+
+_STORAGE = {"sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP}
+
+
+class TrajectoryRecorder(Node):
+    """Writes planned trajectories (and joint states) to a bag."""
+
+    def __init__(self, **kwargs):
+        super().__init__("trajectory_recorder", **kwargs)
+        stamp = datetime.datetime.now().strftime("%Y%m%d_%H%M%S")
+        self.declare_parameter("bag_path", f"rpr3_gwr_bags/{stamp}", ParameterDescriptor(
+            description="Directory of the bag to create (must not exist)", read_only=True))
+        self.declare_parameter("storage", "sqlite3", ParameterDescriptor(
+            description="rosbag2 storage: sqlite3 or mcap", read_only=True))
+        self.declare_parameter("record_joint_states", False, ParameterDescriptor(
+            description="Also record the driver's joint_states", read_only=True))
+        storage = self.get_parameter("storage").value
+        if storage not in _STORAGE:
+            raise ValueError(f"storage must be one of {sorted(_STORAGE)}, got {storage!r}")
+        self.bag_path = pathlib.Path(self.get_parameter("bag_path").value).resolve()
+        self.bag_path.parent.mkdir(parents=True, exist_ok=True)
+        topics = {"planned_trajectory": (JointTrajectory, "trajectory_msgs/msg/JointTrajectory", 10)}
+        if self.get_parameter("record_joint_states").value:
+            topics["joint_states"] = (JointState, "sensor_msgs/msg/JointState",
+                                      qos_profile_sensor_data)
+        self.counts = {topic: 0 for topic in topics}
+        self._queue = queue.Queue()
+        opened = threading.Event()
+        self._thread = threading.Thread(
+            target=self._write_loop, daemon=True,
+            args=(_STORAGE[storage], {t: (self.resolve_topic_name(t), v[1]) for t, v in topics.items()},
+                  opened))
+        self._thread.start()
+        opened.wait()
+        for topic, (msg_type, _, qos) in topics.items():
+            self.create_subscription(msg_type, topic, self._enqueue(topic), qos, raw=True)
+        self.get_logger().info(f"recording {sorted(topics)} to {self.bag_path}")
+
+    def _enqueue(self, topic):
+        def put(raw):
+            self._queue.put((topic, self.get_clock().now().nanoseconds, raw))
+        return put
+
+    def _write_loop(self, storage, topics, opened):
+        writer = Writer(self.bag_path, version=9, storage_plugin=storage)
+        writer.open()
+        typestore = get_typestore(Stores.ROS2_JAZZY)
+        connections = {topic: writer.add_connection(name, type_name, typestore=typestore)
+                       for topic, (name, type_name) in topics.items()}
+        opened.set()
+        try:
+            while (item := self._queue.get()) is not None:
+                topic, stamp, raw = item
+                writer.write(connections[topic], stamp, raw)
+                self.counts[topic] += 1
+        finally:
+            writer.close()
+
+    def destroy_node(self):
+        if self._thread.is_alive():
+            self._queue.put(None)
+            self._thread.join()
+            self.get_logger().info(f"closed {self.bag_path}: {self.counts}")
+        return super().destroy_node()
+
+
+def main(args=None):
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = TrajectoryRecorder()
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()

@@ -1,0 +1,290 @@
+"""The node suite in one process: builder -> planner -> service -> driver ->
+joint states -> bag, over real DDS with a multithreaded executor."""
+
+import math
+import threading
+import time
+
+import numpy as np
+import pytest
+import rclpy
+from rclpy.action import ActionClient
+from rclpy.executors import MultiThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import qos_profile_sensor_data
+from rosbags.rosbag2 import Reader
+from rpr3_gwr_core.kinematics import inverse_kinematics, singularity_margin
+from scipy.optimize import brentq
+from rosbags.typesys import Stores, get_typestore
+from rpr3_gwr_msgs.action import ExecuteTrajectory
+from rpr3_gwr_msgs.msg import Configuration, NSolutionField, WorkspaceRoadmap
+from rpr3_gwr_msgs.srv import PlanPath, ResetDriver
+from rpr3_gwr_nodes.planner import PlannerNode
+from rpr3_gwr_nodes.roadmap_builder import LATCHED_QOS, RoadmapBuilder
+from rpr3_gwr_nodes.rpr3_driver import Rpr3Driver
+from rpr3_gwr_nodes.trajectory_recorder import TrajectoryRecorder
+from rclpy.parameter import Parameter
+from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+D = math.radians
+Q1, Q2 = (17.0, 12.0, 18.0, D(122.82)), (17.0, 10.0, 25.0, D(-24.24))
+MODE_A, MODE_B = (17.0, 20.0, 25.0, D(29.47)), (17.0, 20.0, 25.0, D(96.13))
+TIMEOUT = 30.0
+
+
+def _singular_configuration(alpha=0.5):
+    """(rho, alpha) with det(Jx) = 0: B1 turned on leg 1's circle until the
+    three leg lines concur."""
+    pose = lambda t: [17.0 * math.cos(t), 17.0 * math.sin(t), alpha]
+    theta = brentq(lambda t: singularity_margin(pose(t)), math.pi / 3, math.pi / 2)
+    return (*inverse_kinematics(pose(theta)), alpha)
+
+
+def _configuration(values):
+    return Configuration(rho1=values[0], rho2=values[1], rho3=values[2], alpha=values[3])
+
+
+def _wait(future, timeout=TIMEOUT):
+    done = threading.Event()
+    future.add_done_callback(lambda _: done.set())
+    assert done.wait(timeout), f"no answer within {timeout} s"
+    return future.result()
+
+
+class Suite:
+    """All nodes of the suite plus a client node, spun by one executor thread."""
+
+    def __init__(self, context, bag_path):
+        self.context = context
+        self.builder = RoadmapBuilder(context=context)
+        self.planner = PlannerNode(context=context)
+        self.driver = Rpr3Driver(context=context, parameter_overrides=[
+            Parameter("time_scale", value=40.0), Parameter("rate", value=100.0)])
+        self.recorder = TrajectoryRecorder(context=context, parameter_overrides=[
+            Parameter("bag_path", value=str(bag_path)),
+            Parameter("record_joint_states", value=True)])
+        self.client = Node("suite_test_client", context=context)
+        self.plan_client = self.client.create_client(PlanPath, "plan_path")
+        self.reset_client = self.client.create_client(ResetDriver, "reset")
+        self.action_client = ActionClient(self.client, ExecuteTrajectory, "execute_trajectory")
+        self.joint_states = []
+        self.client.create_subscription(JointState, "joint_states", self.joint_states.append,
+                                        qos_profile_sensor_data)
+        self.executor = MultiThreadedExecutor(num_threads=6, context=context)
+        for node in (self.builder, self.planner, self.driver, self.recorder, self.client):
+            self.executor.add_node(node)
+        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
+        self.thread.start()
+        assert self.planner.ready.wait(120.0), "the planner got no roadmap"
+
+    def plan(self, start, goal, **options):
+        request = PlanPath.Request(start=_configuration(start), goal=_configuration(goal),
+                                   **options)
+        assert self.plan_client.wait_for_service(timeout_sec=TIMEOUT)
+        return _wait(self.plan_client.call_async(request))
+
+    def reset(self, configuration):
+        assert self.reset_client.wait_for_service(timeout_sec=TIMEOUT)
+        request = ResetDriver.Request(configuration=_configuration(configuration))
+        return _wait(self.reset_client.call_async(request))
+
+    def execute(self, trajectory):
+        assert self.action_client.wait_for_server(timeout_sec=TIMEOUT)
+        handle = _wait(self.action_client.send_goal_async(ExecuteTrajectory.Goal(
+            trajectory=trajectory)))
+        assert handle.accepted
+        return _wait(handle.get_result_async(), timeout=120.0).result
+
+    def close(self):
+        self.executor.shutdown(timeout_sec=5.0)
+        for node in (self.client, self.recorder, self.driver, self.planner, self.builder):
+            node.destroy_node()
+
+
+@pytest.fixture(scope="module")
+def suite(tmp_path_factory):
+    from rclpy.context import Context
+
+    context = Context()
+    rclpy.init(context=context)
+    running = Suite(context, tmp_path_factory.mktemp("bags") / "suite_bag")
+    try:
+        yield running
+    finally:
+        running.close()
+        rclpy.try_shutdown(context=context)
+
+
+def regions(response):
+    return sorted([p // 10 for p in g.patch_ids] for g in response.global_paths)
+
+
+def test_paper_first_example_through_the_service(suite):
+    response = suite.plan(Q1, Q2, smooth=True)
+    assert response.success, response.error_msg
+    assert response.error_code == PlanPath.Response.ERROR_NONE
+    assert regions(response) == [[6, 4, 2, 1], [6, 5, 2, 1]]
+    assert list(response.trajectory.joint_names) == ["rho1", "rho2", "rho3"]
+    assert len(response.poses) == len(response.trajectory.points) >= 2
+    assert abs(response.poses[-1].alpha - Q2[3]) < D(0.05)
+    assert response.min_singularity_margin > 1e-3
+
+
+def test_paper_mode_change_through_the_service(suite):
+    response = suite.plan(MODE_A, MODE_B)
+    assert response.success, response.error_msg
+    assert [[p // 10 for p in g.patch_ids] for g in response.global_paths][0] == [3, 1, 3]
+    assert abs(response.poses[0].alpha - MODE_A[3]) < D(0.05)
+    assert abs(response.poses[-1].alpha - MODE_B[3]) < D(0.05)
+
+
+def test_whole_chain_plan_execute_record(suite):
+    assert suite.reset(Q1).success
+    response = suite.plan(Q1, Q2, smooth=True, max_velocity=4.0, max_acceleration=8.0)
+    assert response.success, response.error_msg
+    before = len(suite.joint_states)
+    result = suite.execute(response.trajectory)
+    assert result.error_code == ExecuteTrajectory.Result.SUCCESS, result.reason
+    assert abs(result.final_pose.alpha - Q2[3]) < D(0.05)
+    assert result.min_singularity_margin > 1e-3
+    # Joint states of the whole motion arrive, ending at the goal's legs.
+    at_goal = lambda: any(np.allclose(m.position[:3], Q2[:3], atol=1e-6)
+                          for m in suite.joint_states[before:])
+    deadline = time.monotonic() + 5.0
+    while not at_goal() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert at_goal()
+    moving = suite.joint_states[before:]
+    assert len(moving) > 10
+    assert list(moving[-1].name) == ["rho1", "rho2", "rho3", "theta1", "theta2", "theta3"]
+    # The recorder wrote what the planner published; close the bag and read it.
+    sent = [list(p.positions) for p in response.trajectory.points]
+    suite.executor.remove_node(suite.recorder)
+    suite.recorder.destroy_node()
+    typestore = get_typestore(Stores.ROS2_JAZZY)
+    with Reader(suite.recorder.bag_path) as reader:
+        topics = {c.topic: c for c in reader.connections}
+        assert set(topics) == {"/planned_trajectory", "/joint_states"}
+        recorded = [typestore.deserialize_cdr(raw, c.msgtype)
+                    for c, _, raw in reader.messages(connections=[topics["/planned_trajectory"]])]
+        states = sum(1 for _ in reader.messages(connections=[topics["/joint_states"]]))
+    assert any([list(p.positions) for p in msg.points] == sent for msg in recorded)
+    assert states > 0
+
+
+@pytest.mark.parametrize("start, code", [
+    ((17.0, math.nan, 18.0, 0.0), PlanPath.Response.ERROR_INVALID_INPUT),
+    ((17.0, 12.0, math.inf, 0.0), PlanPath.Response.ERROR_INVALID_INPUT),
+    ((17.0, -3.0, 18.0, 0.0), PlanPath.Response.ERROR_INVALID_INPUT),
+    ((17.0, 80.0, 18.0, 0.0), PlanPath.Response.ERROR_OUT_OF_GRID),
+    ((13.0, 12.0, 18.0, D(122.82)), PlanPath.Response.ERROR_RHO1_MISMATCH),
+    ((17.0, 2.0, 45.0, 0.0), PlanPath.Response.ERROR_NO_SOLUTION),
+    ((17.0, 12.0, 18.0, 0.0), PlanPath.Response.ERROR_NO_ASSEMBLY_MODE),
+    (_singular_configuration(), PlanPath.Response.ERROR_SINGULAR),
+    ((17.0, 20.0, 25.0, D(29.47)), PlanPath.Response.ERROR_INFEASIBLE),
+])
+def test_bad_requests_get_their_code_and_the_node_still_serves(suite, start, code):
+    response = suite.plan(start, Q2)
+    assert not response.success and response.error_code == code, response.error_msg
+    assert response.error_msg
+    assert suite.plan(Q1, Q2).success
+
+
+def test_bad_options_are_an_invalid_input(suite):
+    response = suite.plan(Q1, Q2, max_velocity=1.0, max_acceleration=-1.0)
+    assert response.error_code == PlanPath.Response.ERROR_INVALID_INPUT
+
+
+def test_start_equal_to_goal_is_a_one_point_trajectory(suite):
+    response = suite.plan(Q1, Q1)
+    assert response.success and len(response.trajectory.points) == 1
+
+
+def test_driver_rejects_bad_trajectories_and_keeps_serving(suite):
+    assert suite.reset(Q1).success
+    empty = JointTrajectory(joint_names=["rho1", "rho2", "rho3"])
+    assert suite.execute(empty).error_code == ExecuteTrajectory.Result.INVALID_TRAJECTORY
+    wrong_names = JointTrajectory(joint_names=["a", "b", "c"],
+                                  points=[JointTrajectoryPoint(positions=list(Q1[:3]))])
+    assert suite.execute(wrong_names).error_code == ExecuteTrajectory.Result.INVALID_TRAJECTORY
+    elsewhere = JointTrajectory(joint_names=["rho1", "rho2", "rho3"],
+                                points=[JointTrajectoryPoint(positions=[17.0, 30.0, 30.0])])
+    assert suite.execute(elsewhere).error_code == ExecuteTrajectory.Result.START_MISMATCH
+    response = suite.plan(Q1, Q1)
+    assert suite.execute(response.trajectory).error_code == ExecuteTrajectory.Result.SUCCESS
+
+
+def test_driver_aborts_a_trajectory_through_a_singularity_and_holds(suite):
+    assert suite.reset(Q1).success
+    # Straight legs from q1 towards the far corner cross the singular locus.
+    trajectory = JointTrajectory(joint_names=["rho1", "rho2", "rho3"])
+    for k, t in enumerate(np.linspace(0.0, 1.0, 41)):
+        point = JointTrajectoryPoint(positions=[17.0, 12.0 + 20.0 * t, 18.0 - 12.0 * t])
+        point.time_from_start.sec, point.time_from_start.nanosec = divmod(k * 250_000_000,
+                                                                          1_000_000_000)
+        trajectory.points.append(point)
+    result = suite.execute(trajectory)
+    assert result.error_code in (ExecuteTrajectory.Result.SINGULARITY_ABORT,
+                                 ExecuteTrajectory.Result.ASSEMBLY_MODE_LEFT), result.reason
+    held = suite.driver.state()
+    time.sleep(0.3)
+    after = suite.driver.state()
+    np.testing.assert_array_equal(held[0], after[0])
+    assert abs(after[2]) >= suite.driver.get_parameter("abort_margin").value
+
+
+def test_late_subscriber_receives_the_roadmap(suite):
+    late = Node("late_joiner", context=suite.context)
+    received = {}
+    done = threading.Event()
+
+    def keep(name):
+        def callback(msg):
+            received[name] = msg
+            if len(received) == 2:
+                done.set()
+        return callback
+
+    late.create_subscription(NSolutionField, "field", keep("field"), LATCHED_QOS)
+    late.create_subscription(WorkspaceRoadmap, "roadmap", keep("roadmap"), LATCHED_QOS)
+    suite.executor.add_node(late)
+    try:
+        assert done.wait(TIMEOUT)
+        assert len(received["roadmap"].patches) == 24
+        assert len(received["field"].n_solutions) == 401 * 401
+    finally:
+        suite.executor.remove_node(late)
+        late.destroy_node()
+
+
+def test_concurrent_clients_lose_no_request(suite):
+    clients = [Node(f"load_client_{k}", context=suite.context) for k in range(8)]
+    services = [c.create_client(PlanPath, "plan_path") for c in clients]
+    for c in clients:
+        suite.executor.add_node(c)
+    outcomes = []
+    lock = threading.Lock()
+
+    def run(service):
+        ok = 0
+        for k in range(100):
+            start, goal = ((Q1, Q2), (MODE_A, MODE_B))[k % 2]
+            request = PlanPath.Request(start=_configuration(start), goal=_configuration(goal),
+                                       feasibility_only=k % 4 == 3)
+            ok += _wait(service.call_async(request), timeout=60.0).success
+        with lock:
+            outcomes.append(ok)
+
+    try:
+        assert all(s.wait_for_service(timeout_sec=TIMEOUT) for s in services)
+        threads = [threading.Thread(target=run, args=(s,)) for s in services]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(timeout=600.0)
+        assert outcomes == [100] * 8
+    finally:
+        for c in clients:
+            suite.executor.remove_node(c)
+            c.destroy_node()
