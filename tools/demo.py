@@ -1,53 +1,170 @@
-"""The main job: build the paper's roadmap, plan its two examples, show the result.
+"""The main job (make demo): the suite as real processes on loopback DDS.
 
-Writes figures and plans to out/ and prints a short report.
+Starts roadmap_builder, planner, rpr3_driver and trajectory_recorder as
+separate processes with the project's localhost Fast DDS profile and a ROS
+domain of its own, plans the paper's two examples through the planner's
+service, executes them on the driver, records a bag, writes the figures to
+out/, prints a short report and shuts everything down with SIGINT.
 """
 
 import json
 import math
+import os
 import pathlib
+import random
+import signal
+import subprocess
 import sys
+import threading
 import time
 
-from rpr3_gwr_core.figures import field_figure, plan_figure, roadmap_figure
-from rpr3_gwr_core.planner import PlanOptions, Planner
-from rpr3_gwr_core.roadmap import aspect_groups, build_roadmap
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+OUT = ROOT / "out"
+LIB = ROOT / "ros2_ws" / "install" / "rpr3_gwr_nodes" / "lib" / "rpr3_gwr_nodes"
+PROFILE = ROOT / "ros2_ws" / "fastdds_localhost.xml"
+os.environ.update(FASTRTPS_DEFAULT_PROFILES_FILE=str(PROFILE),
+                  FASTDDS_DEFAULT_PROFILES_FILE=str(PROFILE), RMW_IMPLEMENTATION="rmw_fastrtps_cpp",
+                  ROS_DOMAIN_ID=str(random.SystemRandom().randint(1, 100)))
+os.environ.pop("ROS_AUTOMATIC_DISCOVERY_RANGE", None)
 
-OUT = pathlib.Path(__file__).resolve().parents[1] / "out"
+import rclpy  # noqa: E402  (after the DDS environment is set)
+from rclpy.action import ActionClient  # noqa: E402
+from rclpy.executors import MultiThreadedExecutor  # noqa: E402
+from rclpy.node import Node  # noqa: E402
+from rosbags.rosbag2 import Reader  # noqa: E402
+from rpr3_gwr_core.figures import field_figure, plan_figure, roadmap_figure  # noqa: E402
+from rpr3_gwr_msgs.action import ExecuteTrajectory  # noqa: E402
+from rpr3_gwr_msgs.msg import Configuration, NSolutionField, WorkspaceRoadmap  # noqa: E402
+from rpr3_gwr_msgs.srv import PlanPath, ResetDriver  # noqa: E402
+from rpr3_gwr_nodes.conversions import roadmap_from_msgs  # noqa: E402
+from rpr3_gwr_nodes.roadmap_builder import LATCHED_QOS  # noqa: E402
+
 EXAMPLES = {
-    "paper_5_2_two_configurations": ((17, 12, 18, 122.82), (17, 10, 25, -24.24)),
-    "paper_5_3_assembly_mode_change": ((17, 20, 25, 29.47), (17, 20, 25, 96.13)),
+    "paper_5_2_two_configurations": ((17.0, 12.0, 18.0, 122.82), (17.0, 10.0, 25.0, -24.24)),
+    "paper_5_3_assembly_mode_change": ((17.0, 20.0, 25.0, 29.47), (17.0, 20.0, 25.0, 96.13)),
 }
+TIME_SCALE = 10.0
+TIMEOUT = 120.0
+
+
+def _configuration(q):
+    return Configuration(rho1=q[0], rho2=q[1], rho3=q[2], alpha=math.radians(q[3]))
+
+
+def _wait(future, timeout=TIMEOUT):
+    done = threading.Event()
+    future.add_done_callback(lambda _: done.set())
+    if not done.wait(timeout):
+        raise TimeoutError(f"no answer within {timeout} s")
+    return future.result()
+
+
+def _start(executable, *parameters, log):
+    command = [str(LIB / executable), "--ros-args"]
+    for name, value in parameters:
+        command += ["-p", f"{name}:={value}"]
+    return subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT)
 
 
 def main():
     OUT.mkdir(exist_ok=True)
-    start = time.perf_counter()
-    roadmap = build_roadmap()
-    seg = roadmap.segmentation
-    print(f"roadmap (rho1 = 17, 401 x 401): {seg.n_regions} regions, {len(seg.patches)} patches, "
-          f"{len(seg.gates)} gates, aspect groups {aspect_groups(roadmap.graph)} "
-          f"[{time.perf_counter() - start:.2f} s]")
-    field_figure(roadmap).savefig(OUT / "field.png", dpi=110)
-    roadmap_figure(roadmap).savefig(OUT / "roadmap.png", dpi=110)
-    planner = Planner(roadmap)
-    for name, (q1, q2) in EXAMPLES.items():
-        s = (*q1[:3], math.radians(q1[3]))
-        g = (*q2[:3], math.radians(q2[3]))
-        begin = time.perf_counter()
-        plan = planner.plan(s, g, PlanOptions(smooth=True, max_velocity=2.0, max_acceleration=4.0))
-        took = time.perf_counter() - begin
-        data = plan.to_dict()
-        data["roadmap"] = {"geometry": roadmap.geometry.to_dict(), "grid": roadmap.grid.to_dict()}
-        (OUT / f"{name}.json").write_text(json.dumps(data))
-        plan_figure(roadmap, data).savefig(OUT / f"{name}.png", dpi=110)
-        paths = ", ".join(" -> ".join(map(str, p.patches)) for p in plan.global_paths)
-        print(f"{name}: global paths [{paths}]; {len(plan.rho)} waypoints, "
-              f"{plan.times[-1]:.1f} s at 2 units/s; min singularity margin "
-              f"{plan.validation.min_margin:.4f}; ends at alpha = "
-              f"{math.degrees(plan.poses[-1, 2]):.2f} deg [{1e3 * took:.0f} ms]")
-    print(f"figures and plans in {OUT}")
-    return 0
+    stamp = time.strftime("%Y%m%d_%H%M%S")
+    bag = OUT / f"bag_{stamp}"
+    log = open(OUT / "demo_nodes.log", "w", encoding="utf-8")
+    processes = [
+        _start("roadmap_builder", log=log),
+        _start("planner", log=log),
+        _start("rpr3_driver", ("time_scale", TIME_SCALE), log=log),
+        _start("trajectory_recorder", ("bag_path", str(bag)), ("record_joint_states", True),
+               log=log),
+    ]
+    print(f"started builder, planner, driver and recorder (ROS_DOMAIN_ID "
+          f"{os.environ['ROS_DOMAIN_ID']}, loopback DDS); node logs in {OUT / 'demo_nodes.log'}")
+    rclpy.init()
+    node = Node("rpr3_gwr_demo")
+    executor = MultiThreadedExecutor()
+    executor.add_node(node)
+    spinner = threading.Thread(target=executor.spin, daemon=True)
+    spinner.start()
+    code = 0
+    try:
+        received, both = {}, threading.Event()
+
+        def keep(name):
+            def callback(msg):
+                received[name] = msg
+                if len(received) == 2:
+                    both.set()
+            return callback
+
+        node.create_subscription(NSolutionField, "field", keep("field"), LATCHED_QOS)
+        node.create_subscription(WorkspaceRoadmap, "roadmap", keep("roadmap"), LATCHED_QOS)
+        if not both.wait(TIMEOUT):
+            raise TimeoutError("no roadmap published")
+        roadmap = roadmap_from_msgs(received["field"], received["roadmap"])
+        seg = roadmap.segmentation
+        print(f"roadmap received: rho1 = {roadmap.grid.rho1:g}, {seg.n_regions} regions, "
+              f"{len(seg.patches)} patches, {len(seg.gates)} gates")
+        field_figure(roadmap).savefig(OUT / "field.png", dpi=110)
+        roadmap_figure(roadmap).savefig(OUT / "roadmap.png", dpi=110)
+        plan = node.create_client(PlanPath, "plan_path")
+        reset = node.create_client(ResetDriver, "reset")
+        execute = ActionClient(node, ExecuteTrajectory, "execute_trajectory")
+        if not (plan.wait_for_service(timeout_sec=TIMEOUT) and reset.wait_for_service(
+                timeout_sec=TIMEOUT) and execute.wait_for_server(timeout_sec=TIMEOUT)):
+            raise TimeoutError("planner or driver not available")
+        for name, (q1, q2) in EXAMPLES.items():
+            request = PlanPath.Request(start=_configuration(q1), goal=_configuration(q2),
+                                       smooth=True, max_velocity=2.0, max_acceleration=4.0)
+            begin = time.perf_counter()
+            response = _wait(plan.call_async(request))
+            took = time.perf_counter() - begin
+            if not response.success:
+                raise RuntimeError(f"{name}: planning failed: {response.error_msg}")
+            done = _wait(reset.call_async(ResetDriver.Request(configuration=_configuration(q1))))
+            if not done.success:
+                raise RuntimeError(f"{name}: driver reset failed: {done.error_msg}")
+            handle = _wait(execute.send_goal_async(ExecuteTrajectory.Goal(
+                trajectory=response.trajectory)))
+            result = _wait(handle.get_result_async()).result
+            points = response.trajectory.points
+            duration = points[-1].time_from_start.sec + points[-1].time_from_start.nanosec * 1e-9
+            legs = [list(p.positions) for p in points]
+            length = sum(math.dist(a, b) for a, b in zip(legs, legs[1:]))
+            paths = ", ".join(" -> ".join(map(str, g.patch_ids)) for g in response.global_paths)
+            print(f"{name}: global paths [{paths}]; trajectory {len(points)} points, "
+                  f"{length:.1f} length units of legs, {duration:.1f} s; planned in "
+                  f"{1e3 * took:.0f} ms; min singularity margin planned "
+                  f"{response.min_singularity_margin:.4f}, executed {result.min_singularity_margin:.4f}; "
+                  f"driver: {'done' if result.error_code == 0 else result.reason}, platform at "
+                  f"alpha = {math.degrees(result.final_pose.alpha):.2f} deg")
+            if result.error_code != 0:
+                code = 1
+            data = {"waypoints": [{"rho": r, "pose": [p.x, p.y, p.alpha]}
+                                  for r, p in zip(legs, response.poses)],
+                    "global_paths": [list(g.patch_ids) for g in response.global_paths],
+                    "path_index": response.path_index}
+            (OUT / f"{name}.json").write_text(json.dumps(data))
+            plan_figure(roadmap, data).savefig(OUT / f"{name}.png", dpi=110)
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown()
+        for process in processes:
+            process.send_signal(signal.SIGINT)
+        for process in processes:
+            try:
+                process.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                code = 1
+        log.close()
+    with Reader(bag) as reader:
+        counts = {c.topic: c.msgcount for c in reader.connections}
+    print(f"bag {bag}: {counts}")
+    print(f"figures in {OUT}: field.png, roadmap.png, " + ", ".join(f"{n}.png" for n in EXAMPLES))
+    print("all processes stopped" + ("" if code == 0 else " (with errors)"))
+    return code
 
 
 if __name__ == "__main__":

@@ -125,7 +125,7 @@ def _slot_at_cell(roadmap, rho, pose, cell, tol=1e-6):
     followed = Mechanism(geometry).follow(pose, rho, field.grid.rho_of(cell), substeps=2)
     if followed is None or field.count[cell] == 0:
         return -1
-    current, margin = followed
+    current, margin, _ = followed
     diff = field.poses[cell, : field.count[cell]] - np.array(current)
     diff[:, 2] = np.angle(np.exp(1j * diff[:, 2])) * geometry.scale
     dist = np.linalg.norm(diff, axis=1)

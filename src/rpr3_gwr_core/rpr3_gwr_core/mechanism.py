@@ -92,12 +92,17 @@ class Mechanism:
 
         Returns
         -------
-        ((x, y, alpha), margin) or None
+        ((x, y, alpha), margin, extreme) or None
+            The final pose and its margin, and the margin of smallest
+            magnitude met on the way, or of the other sign if det(Jx)
+            changed sign (so ``sign(extreme) != sign(margin at the start)``
+            tells a crossed singularity); None when the platform cannot
+            follow.
         """
         x, y, alpha = (float(v) for v in pose)
         rho_from, rho_to = np.asarray(rho_from, float), np.asarray(rho_to, float)
         done, h, smallest = 0.0, 1.0 / substeps, 1.0 / substeps / 2**max_halvings
-        margin = None
+        margin = extreme = self.margin(self.rows(x, y, alpha))
         while done < 1.0:
             h = min(h, 1.0 - done)
             out = self.step(x, y, alpha, rho_from + (rho_to - rho_from) * done,
@@ -108,5 +113,7 @@ class Mechanism:
                 h /= 2
                 continue
             (x, y, alpha), margin = out
+            if (margin > 0) != (extreme > 0) or abs(margin) < abs(extreme):
+                extreme = margin
             done += h
-        return (x, y, alpha), margin
+        return (x, y, alpha), margin, extreme

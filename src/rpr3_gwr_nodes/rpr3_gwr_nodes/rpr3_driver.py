@@ -74,8 +74,10 @@ class Rpr3Driver(Node):
                 floating_point_range=[FloatingPointRange(from_value=1e-9, to_value=high)]))
 
         positive("Joint state publishing rate [Hz]", ("rate", 100.0), 1000.0)
+        # Half the planner's validation margin (1e-3): validated plans pass
+        # even where the driver's steps sample the margin differently.
         positive("Smallest normalised |det Jx| allowed; below it a goal aborts",
-                 ("abort_margin", 2e-3), 1.0)
+                 ("abort_margin", 5e-4), 1.0)
         positive("Normalised |det Jx| below which diagnostics warn", ("warn_margin", 0.02), 1.0)
         positive("Largest distance of a trajectory's first point from the current legs "
                  "[length unit]", ("start_tolerance", 1e-3))
@@ -246,17 +248,17 @@ class Rpr3Driver(Node):
             if followed is None:
                 return self._abort(goal_handle, result, _Result.SINGULARITY_ABORT,
                                    "the platform cannot follow the legs: singularity", smallest)
-            (x, y, alpha), margin = followed
+            (x, y, alpha), margin, extreme = followed
             new_pose = (x, y, math.atan2(math.sin(alpha), math.cos(alpha)))
-            if math.copysign(1.0, margin) != sign:
+            if math.copysign(1.0, extreme) != sign:
                 return self._abort(goal_handle, result, _Result.ASSEMBLY_MODE_LEFT,
                                    "det(Jx) would change sign: the platform would leave its "
                                    "assembly mode", smallest)
-            if abs(margin) < abort_margin:
+            if abs(extreme) < abort_margin:
                 return self._abort(goal_handle, result, _Result.SINGULARITY_ABORT,
-                                   f"singularity margin would fall to {abs(margin):.2e} "
-                                   f"< {abort_margin:g}", min(smallest, abs(margin)))
-            smallest = min(smallest, abs(margin))
+                                   f"singularity margin would fall to {abs(extreme):.2e} "
+                                   f"< {abort_margin:g}", min(smallest, abs(extreme)))
+            smallest = min(smallest, abs(extreme))
             with self._lock:
                 self.velocity = _slope(times, positions, elapsed)
                 self.rho, self.pose, self.margin = target, np.array(new_pose), margin

@@ -1,0 +1,144 @@
+"""Benchmark: the planner's service as real processes on loopback DDS.
+
+Run on demand (after ``source ros2_ws/env.sh``):
+    python bench/bench_service.py [--clients 8] [--requests 100]
+
+Starts roadmap_builder and planner as processes (the localhost Fast DDS
+profile, a domain of their own), then:
+
+* publish-to-usable: from the builder's "published" log line to the
+  planner's "planning on a new roadmap" line (transport of the field and
+  roadmap messages plus the planner's rebuild of its state);
+* round trips of PlanPath for the paper's two examples (alternating),
+  first from one client, then from ``--clients`` concurrent clients each in a
+  node and thread of its own: p50, p95 and throughput.
+"""
+
+import argparse
+import json
+import math
+import os
+import pathlib
+import random
+import re
+import signal
+import statistics
+import subprocess
+import tempfile
+import threading
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+LIB = ROOT / "ros2_ws" / "install" / "rpr3_gwr_nodes" / "lib" / "rpr3_gwr_nodes"
+PROFILE = ROOT / "ros2_ws" / "fastdds_localhost.xml"
+os.environ.update(FASTRTPS_DEFAULT_PROFILES_FILE=str(PROFILE),
+                  FASTDDS_DEFAULT_PROFILES_FILE=str(PROFILE), RMW_IMPLEMENTATION="rmw_fastrtps_cpp",
+                  ROS_DOMAIN_ID=str(random.SystemRandom().randint(1, 100)))
+os.environ.pop("ROS_AUTOMATIC_DISCOVERY_RANGE", None)
+
+import rclpy  # noqa: E402
+from rclpy.executors import MultiThreadedExecutor  # noqa: E402
+from rclpy.node import Node  # noqa: E402
+from rpr3_gwr_msgs.msg import Configuration  # noqa: E402
+from rpr3_gwr_msgs.srv import PlanPath  # noqa: E402
+
+D = math.radians
+EXAMPLES = [((17.0, 12.0, 18.0, D(122.82)), (17.0, 10.0, 25.0, D(-24.24))),
+            ((17.0, 20.0, 25.0, D(29.47)), (17.0, 20.0, 25.0, D(96.13)))]
+
+
+def _request(k):
+    start, goal = EXAMPLES[k % 2]
+    return PlanPath.Request(start=Configuration(rho1=start[0], rho2=start[1], rho3=start[2],
+                                                alpha=start[3]),
+                            goal=Configuration(rho1=goal[0], rho2=goal[1], rho3=goal[2],
+                                               alpha=goal[3]))
+
+
+def _call(client, request, timeout=60.0):
+    done = threading.Event()
+    future = client.call_async(request)
+    future.add_done_callback(lambda _: done.set())
+    begin = time.perf_counter()
+    if not done.wait(timeout):
+        raise TimeoutError("request lost")
+    elapsed = time.perf_counter() - begin
+    if not future.result().success:
+        raise RuntimeError(future.result().error_msg)
+    return elapsed
+
+
+def _stamp(path, pattern):
+    for line in path.read_text().splitlines():
+        if re.search(pattern, line):
+            return float(re.search(r"\[(\d+\.\d+)\]", line).group(1))
+    return None
+
+
+def _summary(times, wall):
+    return {"requests": len(times), "p50_ms": round(1e3 * statistics.median(times), 2),
+            "p95_ms": round(1e3 * sorted(times)[int(0.95 * (len(times) - 1))], 2),
+            "throughput_per_s": round(len(times) / wall, 1)}
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--clients", type=int, default=8)
+    parser.add_argument("--requests", type=int, default=100)
+    args = parser.parse_args()
+    logs = pathlib.Path(tempfile.mkdtemp(prefix="rpr3_bench_"))
+    processes = []
+    for name in ("roadmap_builder", "planner"):
+        log = open(logs / f"{name}.log", "w")
+        processes.append(subprocess.Popen([str(LIB / name)], stdout=log, stderr=subprocess.STDOUT))
+    rclpy.init()
+    nodes = [Node(f"bench_client_{k}") for k in range(args.clients)]
+    clients = [n.create_client(PlanPath, "plan_path") for n in nodes]
+    executor = MultiThreadedExecutor(num_threads=4)
+    for n in nodes:
+        executor.add_node(n)
+    threading.Thread(target=executor.spin, daemon=True).start()
+    try:
+        assert clients[0].wait_for_service(timeout_sec=120.0)
+        deadline = time.monotonic() + 120.0
+        while time.monotonic() < deadline:
+            try:
+                _call(clients[0], _request(0))
+                break
+            except RuntimeError:  # no roadmap yet
+                time.sleep(0.2)
+        published = _stamp(logs / "roadmap_builder.log", "published the roadmap")
+        usable = _stamp(logs / "planner.log", "planning on a new roadmap")
+        print(json.dumps({"publish_to_usable_s": round(usable - published, 3)}))
+        for k in range(10):  # warm the planner's patch profiles
+            _call(clients[0], _request(k))
+        begin = time.perf_counter()
+        single = [_call(clients[0], _request(k)) for k in range(args.requests)]
+        print(json.dumps(dict(_summary(single, time.perf_counter() - begin), clients=1)))
+        results = [[] for _ in clients]
+
+        def run(k):
+            results[k] = [_call(clients[k], _request(j + k)) for j in range(args.requests)]
+
+        threads = [threading.Thread(target=run, args=(k,)) for k in range(len(clients))]
+        begin = time.perf_counter()
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        wall = time.perf_counter() - begin
+        merged = [t for r in results for t in r]
+        print(json.dumps(dict(_summary(merged, wall), clients=len(clients),
+                              failures=len(clients) * args.requests - len(merged))))
+    finally:
+        executor.shutdown()
+        for n in nodes:
+            n.destroy_node()
+        rclpy.try_shutdown()
+        for p in processes:
+            p.send_signal(signal.SIGINT)
+            p.wait(timeout=20)
+
+
+if __name__ == "__main__":
+    main()
