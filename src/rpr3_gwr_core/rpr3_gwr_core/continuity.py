@@ -79,8 +79,11 @@ def _continue_into(field, rho, src, dst):
         dist = np.where(np.isnan(dist), np.inf, dist)
         best = np.argmin(dist, axis=1)
         landed = dist[np.arange(rows.size), best] < _LAND_TOL * geometry.scale
-        same_aspect = np.sign(_singularity_margin(pose, geometry)) == np.sign(
-            field.margin[dst[rows], best])
+        # The source, the tracked pose and the landing solution must share an
+        # aspect: a step that jumped across a fold lands on the other sign.
+        target_sign = np.sign(field.margin[dst[rows], best])
+        same_aspect = ((np.sign(field.margin[src[rows], slots]) == target_sign)
+                       & (np.sign(_singularity_margin(pose, geometry)) == target_sign))
         ok = landed & same_aspect
         target[rows[ok], slots[ok]] = best[ok]
         rows, slots = rows[~ok], slots[~ok]

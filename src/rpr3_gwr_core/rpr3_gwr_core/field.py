@@ -8,6 +8,7 @@ Cells are the grid's sample points; cell ``(i, j)`` is at
 
 from dataclasses import dataclass
 import math
+import numbers
 
 import numpy as np
 
@@ -38,23 +39,28 @@ class Grid:
     step: float = 0.125
 
     def __post_init__(self):
-        values = [self.rho1, *self.rho2_range, *self.rho3_range, self.step]
-        if len(self.rho2_range) != 2 or len(self.rho3_range) != 2:
+        try:
+            ranges = [tuple(_real(v) for v in getattr(self, n)) for n in ("rho2_range", "rho3_range")]
+            rho1, step = _real(self.rho1), _real(self.step)
+        except (TypeError, ValueError):
+            raise InvalidInputError(
+                f"grid values must be numbers and (min, max) pairs, got rho1={self.rho1!r}, "
+                f"rho2_range={self.rho2_range!r}, rho3_range={self.rho3_range!r}, "
+                f"step={self.step!r}") from None
+        if any(len(r) != 2 for r in ranges):
             raise InvalidInputError("axis ranges are (min, max) pairs")
-        if not all(isinstance(v, (int, float, np.floating, np.integer)) and math.isfinite(v)
-                   for v in values):
-            raise InvalidInputError(f"grid values must be finite numbers, got {values}")
-        if self.rho1 <= 0:
-            raise InvalidInputError(f"rho1 must be positive, got {self.rho1}")
-        if self.step <= 0:
-            raise InvalidInputError(f"step must be positive, got {self.step}")
-        for name in ("rho2_range", "rho3_range"):
-            lo, hi = getattr(self, name)
+        if not all(math.isfinite(v) for v in (rho1, step, *ranges[0], *ranges[1])):
+            raise InvalidInputError("grid values must be finite")
+        if rho1 <= 0:
+            raise InvalidInputError(f"rho1 must be positive, got {rho1}")
+        if step <= 0:
+            raise InvalidInputError(f"step must be positive, got {step}")
+        for name, (lo, hi) in zip(("rho2_range", "rho3_range"), ranges):
             if lo < 0 or hi < lo:
                 raise InvalidInputError(f"{name} must satisfy 0 <= min <= max, got {(lo, hi)}")
-            object.__setattr__(self, name, (float(lo), float(hi)))
-        object.__setattr__(self, "rho1", float(self.rho1))
-        object.__setattr__(self, "step", float(self.step))
+            object.__setattr__(self, name, (lo, hi))
+        object.__setattr__(self, "rho1", rho1)
+        object.__setattr__(self, "step", step)
 
     @property
     def shape(self):
@@ -93,9 +99,13 @@ class Grid:
 
         Raises
         ------
+        InvalidInputError
+            If a coordinate is NaN or infinite.
         OutOfGridError
             If the point lies farther than half a step outside the grid.
         """
+        if not (math.isfinite(rho2) and math.isfinite(rho3)):
+            raise InvalidInputError(f"cell_of needs finite legs, got ({rho2}, {rho3})")
         index = []
         for value, (lo, _), n in ((rho2, self.rho2_range, self.shape[0]),
                                   (rho3, self.rho3_range, self.shape[1])):
@@ -136,6 +146,13 @@ class Grid:
                        rho3_range=tuple(data["rho3_range"]), step=data["step"])
         except (KeyError, TypeError) as exc:
             raise InvalidInputError(f"malformed grid: {exc}") from exc
+
+
+def _real(value):
+    """``float(value)`` for real numbers only (no strings)."""
+    if not isinstance(value, numbers.Real):
+        raise TypeError(f"not a real number: {value!r}")
+    return float(value)
 
 
 def _count(axis_range, step):

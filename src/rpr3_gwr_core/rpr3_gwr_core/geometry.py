@@ -17,12 +17,20 @@ default :data:`PAPER_GEOMETRY` therefore uses that beta.
 
 from dataclasses import dataclass
 import math
+import numbers
 
 import numpy as np
 
 from .exceptions import InvalidInputError
 
 __all__ = ["Geometry", "PAPER_GEOMETRY", "beta_from_sides"]
+
+
+def _real(value):
+    """``float(value)`` for real numbers only (no strings)."""
+    if not isinstance(value, numbers.Real):
+        raise TypeError(f"not a real number: {value!r}")
+    return float(value)
 
 
 def beta_from_sides(d1, d2, d3):
@@ -73,19 +81,26 @@ class Geometry:
 
     def __post_init__(self):
         for name in ("a1", "a2", "a3"):
-            point = tuple(float(v) for v in getattr(self, name))
+            try:
+                point = tuple(_real(v) for v in getattr(self, name))
+            except (TypeError, ValueError):
+                raise InvalidInputError(f"{name} must be two numbers, got {getattr(self, name)!r}") from None
             if len(point) != 2 or not all(math.isfinite(v) for v in point):
                 raise InvalidInputError(f"{name} must be two finite numbers, got {point}")
             object.__setattr__(self, name, point)
         for name in ("d1", "d3", "beta"):
-            value = float(getattr(self, name))
+            try:
+                value = _real(getattr(self, name))
+            except (TypeError, ValueError):
+                raise InvalidInputError(f"{name} must be a number, got {getattr(self, name)!r}") from None
             if not math.isfinite(value):
                 raise InvalidInputError(f"{name} must be finite, got {value}")
             object.__setattr__(self, name, value)
         if self.d1 <= 0 or self.d3 <= 0:
             raise InvalidInputError("platform sides d1 and d3 must be positive")
-        if not 0.0 < abs(math.sin(self.beta)):
-            raise InvalidInputError("beta must not make the platform flat")
+        # A flat platform (beta = 0 or pi) makes every pose degenerate.
+        if abs(math.sin(self.beta)) < 1e-9:
+            raise InvalidInputError(f"beta = {self.beta} makes the platform flat")
 
     @property
     def d2(self):

@@ -48,7 +48,11 @@ MAX_SOLUTIONS = 6
 _IMAG_TOL = 1e-6
 # |AE - BD| below this (relative to its scale) makes (x, y) ill-conditioned in
 # the linear formula: the pose then comes from the circle of leg 1 instead.
-_DEGENERATE_TOL = 1e-6
+# Between it and _POLISH_TOL the linear formula is polished by Newton.
+_DEGENERATE_TOL = 1e-3
+_POLISH_TOL = 1e-2
+# Two roots closer than this are the halves of one double root [rad].
+_PAIR_GAP = 1e-3
 _SAMPLES = 64
 
 
@@ -198,14 +202,17 @@ def singularity_margin(pose, geometry=PAPER_GEOMETRY):
 
 
 def _singularity_margin(pose, geometry):
-    rows = _rows(pose, geometry)
-    u1x, u1y, u2x, u2y, w2, u3x, u3y, w3 = rows
-    scale = geometry.scale
-    norms = (np.hypot(u1x, u1y) * np.sqrt(u2x**2 + u2y**2 + (w2 / scale) ** 2)
-             * np.sqrt(u3x**2 + u3y**2 + (w3 / scale) ** 2))
-    det = _det_rows(*rows) / scale
+    u1x, u1y, u2x, u2y, w2, u3x, u3y, w3 = _rows(pose, geometry)
+    w2, w3 = w2 / geometry.scale, w3 / geometry.scale
+    n1 = np.hypot(u1x, u1y)
+    n2 = np.sqrt(u2x**2 + u2y**2 + w2**2)
+    n3 = np.sqrt(u3x**2 + u3y**2 + w3**2)
+    # Normalising the rows before the determinant keeps tiny legs from
+    # underflowing the product of the norms.
     with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(norms > 0, det / np.where(norms > 0, norms, 1.0), 0.0)
+        margin = _det_rows(u1x / n1, u1y / n1, u2x / n2, u2y / n2, w2 / n2,
+                           u3x / n3, u3y / n3, w3 / n3)
+    return np.where((n1 > 0) & (n2 > 0) & (n3 > 0), margin, 0.0)
 
 
 def aspect(pose, geometry=PAPER_GEOMETRY):
@@ -436,33 +443,60 @@ def _solve(rho, geometry):
     candidate = np.stack([x + ax, y + ay, a], axis=-1)
     if not np.all(regular):
         candidate[~regular] = _degenerate_poses(
-            r[~regular], a[~regular], cols[~regular], alpha[rows[~regular]],
-            big_a[~regular], big_b[~regular], g[~regular], geometry)
-    if not np.all(regular):
-        # The circle construction is only a first guess; Newton is safe here
-        # because a degenerate orientation is not a singularity.  Regular
-        # roots keep the linear formula: next to a fold, Newton could wander.
-        candidate[~regular] = _newton(candidate[~regular], r[~regular], geometry, 3)
+            r[~regular], a[~regular], rows[~regular], big_a[~regular], big_b[~regular],
+            big_d[~regular], big_e[~regular], g[~regular], h[~regular], geometry)
+    # Near a degenerate orientation the linear formula loses digits, and the
+    # circle construction is only a first guess: polish those poses with
+    # Newton (safe there, a degenerate orientation is not a singular one), and
+    # keep a polished pose only if it fits the legs better and, for a regular
+    # root, stays close (next to a fold, Newton could wander off).
+    rough = np.abs(delta) < _POLISH_TOL * scale
+    if np.any(rough):
+        before = candidate[rough]
+        after = _newton(before, r[rough], geometry, 3)
+        fit = lambda p: np.max(np.abs(_residuals(p, r[rough], geometry)), axis=-1)
+        moved = np.max(np.abs(after - before), axis=-1)
+        keep = (fit(after) < fit(before)) & ((moved < 1e-3 * geometry.scale) | ~regular[rough])
+        candidate[np.flatnonzero(rough)[keep]] = after[keep]
     poses[rows, cols] = candidate
     poses[..., 2] = np.angle(np.exp(1j * poses[..., 2]))
     return np.isfinite(alpha).sum(axis=1).astype(np.uint8), poses
 
 
-def _degenerate_poses(rho, alpha, col, cell_alpha, big_a, big_b, g, geometry):
+def _residuals(pose, rho, geometry):
+    u1x, u1y, u2x, u2y, _, u3x, u3y, _ = _rows(pose, geometry)
+    return np.stack([u1x**2 + u1y**2 - rho[..., 0] ** 2, u2x**2 + u2y**2 - rho[..., 1] ** 2,
+                     u3x**2 + u3y**2 - rho[..., 2] ** 2], axis=-1)
+
+
+def _degenerate_poses(rho, alpha, row, big_a, big_b, big_d, big_e, g, h, geometry):
     """Poses at (near) degenerate orientations, where legs 2 and 3 give
-    parallel lines for B1: intersect leg 2's line with leg 1's circle.  The
-    two roots of the double pair take the two intersections, in the order of
-    their position within the pair so that they do not collapse on one pose."""
+    nearly parallel lines for B1: the two intersections of leg 2's line with
+    leg 1's circle are the candidates.  An isolated root takes the one that
+    fits leg 3's line better.  The two roots of a close pair (a double root at
+    the degenerate orientation, split by rounding) take one candidate each,
+    matched so that the pair fits leg 3 best, so they never collapse on one
+    pose."""
     norm2 = big_a**2 + big_b**2
     foot = g / norm2
     px, py = big_a * foot, big_b * foot
     half = np.sqrt(np.maximum(rho[:, 0] ** 2 - foot**2 * norm2, 0.0) / norm2)
-    # Which member of its close pair is this root?  The lower one takes +.
-    prev = np.where(col > 0, cell_alpha[np.arange(len(col)), np.maximum(col - 1, 0)], -np.inf)
-    is_upper = np.isfinite(prev) & (np.abs(alpha - prev) < 1e-3)
-    sign = np.where(is_upper, -1.0, 1.0)
+    plus = np.stack([px - big_b * half, py + big_a * half], axis=-1)
+    minus = np.stack([px + big_b * half, py - big_a * half], axis=-1)
+    misfit_plus = np.abs(big_d * plus[:, 0] + big_e * plus[:, 1] - h)
+    misfit_minus = np.abs(big_d * minus[:, 0] + big_e * minus[:, 1] - h)
+    take_plus = misfit_plus <= misfit_minus
+    order = np.lexsort((alpha, row))
+    first, second = order[:-1], order[1:]
+    paired = (row[first] == row[second]) & (np.abs(alpha[second] - alpha[first]) < _PAIR_GAP)
+    first, second = first[paired], second[paired]
+    straight = misfit_plus[first] + misfit_minus[second]
+    crossed = misfit_minus[first] + misfit_plus[second]
+    take_plus[first] = straight <= crossed
+    take_plus[second] = ~take_plus[first]
+    chosen = np.where(take_plus[:, None], plus, minus)
     ax, ay = geometry.a1
-    return np.stack([px - sign * big_b * half + ax, py + sign * big_a * half + ay, alpha], axis=-1)
+    return np.stack([chosen[:, 0] + ax, chosen[:, 1] + ay, alpha], axis=-1)
 
 
 def direct_kinematics(rho, geometry=PAPER_GEOMETRY):

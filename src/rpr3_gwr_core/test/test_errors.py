@@ -61,15 +61,11 @@ def test_geometry_rejects_bad_values(kwargs):
         Geometry(**kwargs)
 
 
-@pytest.mark.xfail(strict=True, reason="BUG: Geometry(beta=pi) (a flat platform) is accepted: "
-                   "abs(sin(pi)) = 1.2e-16 passes the 'not flat' check")
 def test_geometry_rejects_a_flat_platform_at_pi():
     with pytest.raises(InvalidInputError):
         Geometry(beta=math.pi)
 
 
-@pytest.mark.xfail(strict=True, reason="BUG: a scalar base point raises TypeError, "
-                   "not InvalidInputError")
 def test_geometry_rejects_a_scalar_base_point():
     with pytest.raises(InvalidInputError):
         Geometry(a2=5.0)
@@ -88,8 +84,6 @@ def test_cell_of_outside_the_grid_raises_out_of_grid(point):
         Grid(step=0.5).cell_of(*point)
 
 
-@pytest.mark.xfail(strict=True, reason="BUG: cell_of(NaN/inf) raises a bare ValueError / "
-                   "OverflowError from int(round(...)), not a GWRError")
 @pytest.mark.parametrize("point", [(NAN, 10.0), (10.0, INF)])
 def test_cell_of_non_finite_raises_a_gwr_error(point):
     with pytest.raises(GWRError):

@@ -29,11 +29,6 @@ def planner(paper_roadmap):
     return Planner(paper_roadmap)
 
 
-@pytest.fixture(scope="session")
-def paper_roadmap():
-    return build_roadmap()
-
-
 def regions(path):
     return [p // 10 for p in path.patches]
 

@@ -7,7 +7,7 @@ import networkx as nx
 import numpy as np
 import pytest
 
-from conftest import OTHER_GEOMETRY, nearest_slot
+from gwr_cases import OTHER_GEOMETRY, nearest_slot
 from rpr3_gwr_core.continuity import match_solutions, neighbour_pairs
 from rpr3_gwr_core.field import Grid, compute_field
 from rpr3_gwr_core.geometry import PAPER_GEOMETRY
@@ -299,9 +299,6 @@ def _two_cell_field(rho1, rho2_range, rho3_range, step):
     return compute_field(OTHER_GEOMETRY, grid)
 
 
-@pytest.mark.xfail(strict=True, reason="BUG: match_solutions links solutions of opposite "
-                   "aspect (the aspect check compares the tracked pose with its target, "
-                   "not the source solution)")
 @pytest.mark.parametrize("rho1, rho2_range, rho3_range, step", [
     (7.7, (9.25, 9.5), (1.25, 1.25), 0.25),   # jumps over a gap with no real solution
     (10.0, (8.0, 8.0), (15.0, 15.5), 0.5),    # passes through a singular pose
@@ -313,8 +310,6 @@ def test_continuation_never_links_opposite_aspects(rho1, rho2_range, rho3_range,
         assert np.sign(field.margin[0, i]) == np.sign(field.margin[1, match[i]])
 
 
-@pytest.mark.xfail(strict=True, reason="BUG: on the other geometry at rho1 = 7.7 a gate "
-                   "(31, 72) joins patches of opposite aspects and merges the two groups")
 def test_other_geometry_rho1_7_7_gates_keep_aspects():
     grid = Grid(rho1=7.7, rho2_range=(0.0, 30.0), rho3_range=(0.0, 30.0), step=0.25)
     seg = segment(compute_field(OTHER_GEOMETRY, grid))
@@ -322,8 +317,6 @@ def test_other_geometry_rho1_7_7_gates_keep_aspects():
     assert len(aspect_groups(roadmap_graph(seg))) == 2
 
 
-@pytest.mark.xfail(strict=True, reason="BUG: on the other geometry at rho1 = 10 segment() "
-                   "raises RuntimeError 'patch 33 mixes aspects'")
 def test_other_geometry_rho1_10_segments_without_error():
     grid = Grid(rho1=10.0, rho2_range=(0.0, 30.0), rho3_range=(0.0, 30.0), step=0.5)
     seg = segment(compute_field(OTHER_GEOMETRY, grid))

@@ -233,18 +233,20 @@ class Rpr3Driver(Node):
         smallest = abs(margin0)
         feedback = ExecuteTrajectory.Feedback()
         begin = time.monotonic()
-        elapsed = 0.0
+        elapsed = -1.0
         while True:
             if goal_handle.is_cancel_requested:
                 goal_handle.canceled()
                 result.error_code, result.reason = _Result.CANCELED, "canceled"
                 return self._finish(result, smallest)
+            previous = elapsed
             elapsed = min((time.monotonic() - begin) * scale, times[-1])
             target = np.array([np.interp(elapsed, times, positions[:, j]) for j in range(3)])
+            # A late control step must still pass through the waypoints in
+            # between: the path, not a chord, is what was validated.
+            between = (times > previous) & (times < elapsed)
             rho, pose, _ = self.state()
-            # Continuation steps no longer than the planner's validator takes.
-            substeps = max(1, math.ceil(float(np.max(np.abs(target - rho))) / DEFAULT_MAX_STEP))
-            followed = self.mechanism.follow(pose, rho, target, substeps=substeps)
+            followed = self._follow(pose, rho, list(positions[between]) + [target])
             if followed is None:
                 return self._abort(goal_handle, result, _Result.SINGULARITY_ABORT,
                                    "the platform cannot follow the legs: singularity", smallest)
@@ -273,6 +275,23 @@ class Rpr3Driver(Node):
         goal_handle.succeed()
         result.error_code = _Result.SUCCESS
         return self._finish(result, smallest)
+
+    def _follow(self, pose, rho, points):
+        """Follow the legs from ``rho`` through ``points`` in steps no longer
+        than the planner's validator takes; ``(pose, margin, extreme)`` with
+        the most critical margin of the whole way, or None."""
+        extreme = None
+        for point in points:
+            substeps = max(1, math.ceil(float(np.max(np.abs(point - rho))) / DEFAULT_MAX_STEP))
+            followed = self.mechanism.follow(pose, rho, point, substeps=substeps)
+            if followed is None:
+                return None
+            pose, margin, step_extreme = followed
+            if (extreme is None or (step_extreme > 0) != (extreme > 0)
+                    or abs(step_extreme) < abs(extreme)):
+                extreme = step_extreme
+            rho = point
+        return pose, margin, extreme
 
     def _abort(self, goal_handle, result, code, reason, smallest):
         self.get_logger().warning(f"aborting the trajectory and holding still: {reason}")
