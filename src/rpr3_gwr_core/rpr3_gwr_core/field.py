@@ -6,9 +6,11 @@ Cells are the grid's sample points; cell ``(i, j)`` is at
 ``(rho2[i], rho3[j])`` and its flat index is ``i * n3 + j`` (row-major).
 """
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 import math
 import numbers
+import os
 
 import numpy as np
 
@@ -161,7 +163,8 @@ def _count(axis_range, step):
 
 
 PAPER_GRID = Grid()
-_CHUNK = 16384
+_CHUNK = 8192
+_WORKERS = max(1, min(4, os.cpu_count() or 1))
 
 
 @dataclass(frozen=True, eq=False)
@@ -214,10 +217,14 @@ def compute_field(geometry=PAPER_GEOMETRY, grid=PAPER_GRID):
     rho = grid.rho()
     count = np.empty(grid.size, dtype=np.uint8)
     poses = np.empty((grid.size, MAX_SOLUTIONS, 3))
-    # Chunks bound the temporaries of the root finder (they scale with cells).
-    for start in range(0, grid.size, _CHUNK):
+    # Chunks bound the temporaries of the root finder (they scale with cells)
+    # and keep every core busy: numpy and LAPACK release the GIL.
+    def solve(start):
         part = slice(start, start + _CHUNK)
         count[part], poses[part] = _solve(rho[part], geometry)
+
+    with ThreadPoolExecutor(max_workers=_WORKERS) as pool:
+        list(pool.map(solve, range(0, grid.size, _CHUNK)))
     with np.errstate(invalid="ignore"):
         margin = np.where(np.isfinite(poses[..., 0]), _singularity_margin(poses, geometry), np.nan)
     return NSolutionField(geometry=geometry, grid=grid, count=count, poses=poses, margin=margin)

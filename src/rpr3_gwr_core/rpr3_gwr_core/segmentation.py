@@ -32,6 +32,7 @@ labels the same connected sets with ``scipy.sparse.csgraph`` and is tested to
 give identical patches, gates and boundaries.
 """
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field as dataclass_field
 
 import numpy as np
@@ -152,7 +153,11 @@ def segment(field, method="components", min_region_cells=8):
         raise InvalidInputError(f"method must be one of {METHODS}, got {method!r}")
     if int(min_region_cells) < 1:
         raise InvalidInputError("min_region_cells must be at least 1")
-    links = [(lo, up, match_solutions(field, lo, up)) for lo, up in neighbour_pairs(field.grid.shape)]
+    pairs = neighbour_pairs(field.grid.shape)
+    # One thread per axis: the work is numpy's, which releases the GIL.
+    with ThreadPoolExecutor(max_workers=len(pairs)) as pool:
+        matches = list(pool.map(lambda pair: match_solutions(field, *pair), pairs))
+    links = [(lo, up, match) for (lo, up), match in zip(pairs, matches)]
     region = _regions(field, links, int(min_region_cells))
     disk_links = _within_region_links(field, region, links)
     n_disks = field.grid.size * MAX_SOLUTIONS
