@@ -24,6 +24,8 @@ __all__ = ["PlanOptions", "Plan", "Planner"]
 # Smoothing keeps this many cells between the path and any patch boundary.
 _SMOOTH_CLEARANCE = 3.0
 _SAMPLES_PER_CELL = 5
+# Local re-plans around steps the validator refused, per global path.
+_REPAIRS = 4
 
 
 @dataclass(frozen=True)
@@ -151,7 +153,8 @@ class Planner:
                  min_margin=DEFAULT_MIN_MARGIN, max_step=DEFAULT_MAX_STEP):
         self.roadmap = roadmap
         self.index = RoadmapIndex(roadmap)
-        self.local = LocalPlanner(roadmap, clearance_weight)
+        # Plans must keep min_margin; cells within thrice that are avoided.
+        self.local = LocalPlanner(roadmap, clearance_weight, low_margin=3 * min_margin)
         self.min_margin = float(min_margin)
         self.max_step = float(max_step)
         self._rho = roadmap.grid.rho()
@@ -197,20 +200,17 @@ class Planner:
             return Plan(True, answer.reason, s, g, paths)
         failures = []
         for k, path in enumerate(paths):
-            local = self.local.plan(path.patches, s.cell, g.cell)
-            rho, patches = self._waypoints(s, g, local)
-            result = validate_path(self.roadmap.geometry, rho, s.pose, g.pose,
-                                   self.min_margin, self.max_step)
+            result, rho, patches, local = self._validated_path(path, s, g)
+            if not result.ok:
+                failures.append(f"path {list(path.patches)}: {result.reason}")
+                continue
             smoothed = False
-            if result.ok and options.smooth and len(rho) > 2:
+            if options.smooth and len(rho) > 2:
                 rho_s, patches_s = self._smooth(rho, patches, local)
                 result_s = validate_path(self.roadmap.geometry, rho_s, s.pose, g.pose,
                                          self.min_margin, self.max_step)
                 if result_s.ok:
                     rho, patches, result, smoothed = rho_s, patches_s, result_s, True
-            if not result.ok:
-                failures.append(f"path {list(path.patches)}: {result.reason}")
-                continue
             timing = (None, None, None)
             if options.max_velocity is not None:
                 timing = time_parameterize(rho, options.max_velocity, options.max_acceleration)
@@ -220,13 +220,36 @@ class Planner:
                         smoothed=smoothed)
         raise ValidationError("no global path gave a valid trajectory: " + "; ".join(failures))
 
+    def _validated_path(self, path, s, g):
+        """Local path along a global path that passes the validator.
+
+        Between two cell centres a sheet can pass right by a cusp point, where
+        the validator refuses the step although both cells are fine; that
+        step is then blocked and the local path planned again, a few times.
+        """
+        blocked = set()
+        for _ in range(_REPAIRS + 1):
+            local = self.local.plan(path.patches, s.cell, g.cell, blocked)
+            rho, patches, cells = self._waypoints(s, g, local)
+            result = validate_path(self.roadmap.geometry, rho, s.pose, g.pose,
+                                   self.min_margin, self.max_step)
+            k = result.failed_segment
+            if result.ok or k < 1 or min(cells[k - 1], cells[k]) < 0:
+                break
+            blocked.add((int(cells[k - 1]), int(cells[k])))
+        return result, rho, patches, local
+
     def _waypoints(self, s, g, local):
-        """Exact start, the cell centres, exact goal; repeated points dropped."""
+        """Exact start, the cell centres, exact goal; repeated points dropped.
+
+        Returns the legs, the patch of each waypoint and its cell (-1 for
+        the exact start and goal)."""
         rho = np.vstack([s.rho, self._rho[local.cells], g.rho])
         patches = np.concatenate([[s.patch], local.patches, [g.patch]])
+        cells = np.concatenate([[-1], local.cells, [-1]])
         keep = np.ones(len(rho), dtype=bool)
         keep[1:] = np.any(np.abs(np.diff(rho, axis=0)) > 1e-12, axis=1)
-        return rho[keep], patches[keep]
+        return rho[keep], patches[keep], cells[keep]
 
     def _smooth(self, rho, patches, local):
         """Shortcut inside each patch, then round the corners.

@@ -48,6 +48,9 @@ class Validation:
         Sign of det(Jx) along the path.
     steps : int
         Continuation steps taken.
+    failed_segment : int
+        Index k of the segment from waypoint k - 1 to waypoint k where the
+        path failed; -1 when it did not fail inside a segment.
     poses : ndarray, shape (n, 3)
         The followed platform pose at each waypoint [length unit, length unit, rad].
     """
@@ -58,6 +61,7 @@ class Validation:
     aspect: int
     steps: int
     poses: np.ndarray
+    failed_segment: int = -1
 
     def as_dict(self):
         """Plain-data summary (no poses)."""
@@ -104,9 +108,9 @@ def validate_path(geometry, rho_path, start_pose, goal_pose=None,
     poses = np.empty((rho_path.shape[0], 3))
     steps = 0
 
-    def result(ok, reason, smallest, sign):
+    def result(ok, reason, smallest, sign, segment=-1):
         return Validation(ok=ok, reason=reason, min_margin=smallest, aspect=sign, steps=steps,
-                          poses=poses)
+                          poses=poses, failed_segment=segment)
 
     rows = mech.rows(x, y, alpha)
     residual = _residual(rows, rho_path[0])
@@ -134,7 +138,7 @@ def validate_path(geometry, rho_path, start_pose, goal_pose=None,
                 if h * full < 2.0**-_MAX_HALVINGS:
                     poses[k:] = np.nan
                     return result(False, f"platform cannot follow the legs before waypoint {k}",
-                                  smallest, sign)
+                                  smallest, sign, k)
                 h /= 2
                 continue
             (x, y, alpha), margin = pose
@@ -146,12 +150,12 @@ def validate_path(geometry, rho_path, start_pose, goal_pose=None,
             if (margin > 0) != (sign > 0):
                 poses[k:] = np.nan
                 return result(False, f"det(Jx) changes sign before waypoint {k}: "
-                              "a parallel singularity is crossed", 0.0, sign)
+                              "a parallel singularity is crossed", 0.0, sign, k)
             smallest = min(smallest, abs(margin))
             if smallest < min_margin:
                 poses[k:] = np.nan
                 return result(False, f"margin {smallest:.2e} below {min_margin:g} before "
-                              f"waypoint {k}", smallest, sign)
+                              f"waypoint {k}", smallest, sign, k)
         poses[k] = x, y, math.atan2(math.sin(alpha), math.cos(alpha))
     if goal_pose is not None:
         gx, gy, galpha = (float(v) for v in goal_pose)
