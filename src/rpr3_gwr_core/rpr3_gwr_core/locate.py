@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from .exceptions import (AssemblyModeError, InvalidInputError, NoSolutionError,
-                         OutOfGridError, Rho1MismatchError, SingularityError)
+                         Rho1MismatchError, SingularityError)
 from .kinematics import _singularity_margin, direct_kinematics
 from .mechanism import Mechanism
 

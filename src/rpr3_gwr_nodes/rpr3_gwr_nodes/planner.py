@@ -18,10 +18,9 @@ import math
 import threading
 import time
 
-import rclpy
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rpr3_gwr_core.exceptions import GWRError
 from rpr3_gwr_core.planner import PlanOptions, Planner
@@ -31,6 +30,7 @@ from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from .conversions import duration_msg, roadmap_from_msgs
+from .spin import run
 from .roadmap_builder import LATCHED_QOS
 
 __all__ = ["PlannerNode", "ERROR_CODES", "JOINT_NAMES", "plan_to_trajectory", "main"]
@@ -168,16 +168,4 @@ class PlannerNode(Node):
 
 
 def main(args=None):
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = PlannerNode()
-        executor = MultiThreadedExecutor(num_threads=4)
-        executor.add_node(node)
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+    run(PlannerNode, MultiThreadedExecutor, args, num_threads=4)

@@ -16,10 +16,9 @@ which rebuilds and republishes; invalid values are refused with a reason):
 import threading
 import time
 
-import rclpy
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rpr3_gwr_core.exceptions import GWRError
@@ -30,6 +29,7 @@ from rpr3_gwr_msgs.msg import NSolutionField, WorkspaceRoadmap
 from std_msgs.msg import Header
 
 from .conversions import roadmap_to_msgs
+from .spin import run
 
 __all__ = ["RoadmapBuilder", "LATCHED_QOS", "main"]
 
@@ -133,16 +133,4 @@ class RoadmapBuilder(Node):
 
 
 def main(args=None):
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = RoadmapBuilder()
-        executor = MultiThreadedExecutor()
-        executor.add_node(node)
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+    run(RoadmapBuilder, MultiThreadedExecutor, args)

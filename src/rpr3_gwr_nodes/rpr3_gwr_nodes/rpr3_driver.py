@@ -24,12 +24,11 @@ import threading
 import time
 
 import numpy as np
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from rpr3_gwr_core.exceptions import GWRError
@@ -43,6 +42,7 @@ from rpr3_gwr_msgs.srv import ResetDriver
 from sensor_msgs.msg import JointState
 
 from .conversions import duration_msg
+from .spin import run
 from .planner import JOINT_NAMES
 
 __all__ = ["Rpr3Driver", "main"]
@@ -307,16 +307,4 @@ class Rpr3Driver(Node):
 
 
 def main(args=None):
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = Rpr3Driver()
-        executor = MultiThreadedExecutor(num_threads=4)
-        executor.add_node(node)
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+    run(Rpr3Driver, MultiThreadedExecutor, args, num_threads=4)

@@ -18,15 +18,16 @@ import pathlib
 import queue
 import threading
 
-import rclpy
 from rcl_interfaces.msg import ParameterDescriptor
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
+
+from .spin import run
 
 __all__ = ["TrajectoryRecorder", "main"]
 
@@ -96,16 +97,4 @@ class TrajectoryRecorder(Node):
 
 
 def main(args=None):
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = TrajectoryRecorder()
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+    run(TrajectoryRecorder, SingleThreadedExecutor, args)
