@@ -1,0 +1,47 @@
+"""The roadmap builder's run-time parameters: rebuild on a valid change,
+refusal with a reason on an invalid one."""
+
+import threading
+
+from rclpy.executors import MultiThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rpr3_gwr_msgs.msg import NSolutionField
+from rpr3_gwr_nodes.roadmap_builder import LATCHED_QOS, RoadmapBuilder
+
+TIMEOUT = 60.0
+
+
+def test_builder_rebuilds_on_rho1_and_refuses_bad_grids(ros_context):
+    builder = RoadmapBuilder(context=ros_context,
+                             parameter_overrides=[Parameter("step", value=0.5)])
+    listener = Node("field_listener", context=ros_context)
+    executor = MultiThreadedExecutor(context=ros_context)
+    fields, arrived = [], threading.Event()
+
+    def keep(msg):
+        fields.append(msg)
+        arrived.set()
+
+    listener.create_subscription(NSolutionField, "field", keep, LATCHED_QOS)
+    executor.add_node(builder)
+    executor.add_node(listener)
+    spinner = threading.Thread(target=executor.spin, daemon=True)
+    spinner.start()
+    try:
+        assert arrived.wait(TIMEOUT), "no field published"
+        assert fields[-1].grid.rho1 == 17.0 and fields[-1].grid.rho2_count == 101
+        for bad in (Parameter("step", value=-0.5), Parameter("rho2_range", value=[10.0, 5.0]),
+                    Parameter("rho1", value=0.0), Parameter("step", value=0.001)):
+            result = builder.set_parameters([bad])[0]
+            assert not result.successful and result.reason, bad.name
+        assert builder.get_parameter("step").value == 0.5
+        arrived.clear()
+        assert builder.set_parameters([Parameter("rho1", value=13.0)])[0].successful
+        assert arrived.wait(TIMEOUT), "no field republished after the change"
+        assert fields[-1].grid.rho1 == 13.0
+        assert builder.roadmap.grid.rho1 == 13.0
+    finally:
+        executor.shutdown()
+        listener.destroy_node()
+        builder.destroy_node()
