@@ -14,7 +14,7 @@ relation is a partial bijection and gates come out symmetric.
 
 import numpy as np
 
-from .kinematics import MAX_SOLUTIONS, _newton, _predict, _singularity_margin
+from .kinematics import MAX_SOLUTIONS, _newton, _predict, _singularity_margin, wrap_angle
 
 __all__ = ["neighbour_pairs", "match_solutions"]
 
@@ -74,7 +74,7 @@ def _continue_into(field, rho, src, dst):
         pose = _track(field.poses[src[rows], slots], rho[src[rows]], rho[dst[rows]],
                       geometry, substeps)
         diff = field.poses[dst[rows]] - pose[:, None, :]
-        diff[..., 2] = np.angle(np.exp(1j * diff[..., 2])) * geometry.scale
+        diff[..., 2] = wrap_angle(diff[..., 2]) * geometry.scale
         dist = np.linalg.norm(diff, axis=-1)
         dist = np.where(np.isnan(dist), np.inf, dist)
         best = np.argmin(dist, axis=1)
@@ -140,7 +140,7 @@ def _alpha_gap(alpha, count, rows, slots):
     gap = np.full(rows.size, np.inf)
     for neighbour in ((slots + 1) % n, (slots - 1) % n):
         other = alpha[rows, neighbour]
-        d = np.abs(np.angle(np.exp(1j * (other - here))))
+        d = np.abs(wrap_angle(other - here))
         gap = np.minimum(gap, np.where(neighbour != slots, d, np.inf))
     return gap
 
@@ -155,7 +155,7 @@ def _screened(field, rho, lower, upper):
     for src, dst in ((lower[same], upper[same]), (upper[same], lower[same])):
         pose = _predict(field.poses[src[rows], slots], rho[src[rows]], rho[dst[rows]], geometry)
         diff = field.poses[dst[rows], slots] - pose
-        diff[:, 2] = np.angle(np.exp(1j * diff[:, 2])) * scale
+        diff[:, 2] = wrap_angle(diff[:, 2]) * scale
         err = np.linalg.norm(diff, axis=-1) / scale
         gap = _alpha_gap(field.poses[..., 2], field.count, dst[rows], slots)
         bad |= ~(err < _SCREEN_TOL) | ~(gap > _SCREEN_RATIO * err)

@@ -217,14 +217,16 @@ def compute_field(geometry=PAPER_GEOMETRY, grid=PAPER_GRID):
     rho = grid.rho()
     count = np.empty(grid.size, dtype=np.uint8)
     poses = np.empty((grid.size, MAX_SOLUTIONS, 3))
+    margin = np.full((grid.size, MAX_SOLUTIONS), np.nan)
+
     # Chunks bound the temporaries of the root finder (they scale with cells)
     # and keep every core busy: numpy and LAPACK release the GIL.
     def solve(start):
         part = slice(start, start + _CHUNK)
         count[part], poses[part] = _solve(rho[part], geometry)
+        valid = np.arange(MAX_SOLUTIONS) < count[part, None]
+        margin[part][valid] = _singularity_margin(poses[part][valid], geometry)
 
     with ThreadPoolExecutor(max_workers=_WORKERS) as pool:
         list(pool.map(solve, range(0, grid.size, _CHUNK)))
-    with np.errstate(invalid="ignore"):
-        margin = np.where(np.isfinite(poses[..., 0]), _singularity_margin(poses, geometry), np.nan)
     return NSolutionField(geometry=geometry, grid=grid, count=count, poses=poses, margin=margin)

@@ -27,6 +27,7 @@ from .geometry import PAPER_GEOMETRY
 
 __all__ = [
     "MAX_SOLUTIONS",
+    "wrap_angle",
     "inverse_kinematics",
     "direct_kinematics",
     "direct_kinematics_batch",
@@ -54,6 +55,11 @@ _POLISH_TOL = 1e-2
 # Two roots closer than this are the halves of one double root [rad].
 _PAIR_GAP = 1e-3
 _SAMPLES = 64
+
+
+def wrap_angle(angle):
+    """Angles wrapped to (-pi, pi] [rad], elementwise."""
+    return np.pi - np.remainder(np.pi - np.asarray(angle, dtype=float), 2 * np.pi)
 
 
 def _as_pose(pose):
@@ -391,9 +397,10 @@ def _companion_roots(coeffs, phi, values):
     companion[:, np.arange(1, 6), np.arange(5)] = 1.0
     companion[:, :, 5] = -poly[:, :6] / poly[:, 6:7]
     t = np.linalg.eigvals(companion)
-    alpha = 2 * np.arctan(t.astype(complex)) + alpha0[:, None]
-    real = np.abs(alpha.imag) < _IMAG_TOL
-    return np.where(real, np.angle(np.exp(1j * alpha.real)), np.nan)
+    # Im(2 atan(a + ib)) = 2b / (1 + a**2) to first order in the small b
+    # that decides whether a root is real.
+    real = np.abs(2 * t.imag) < _IMAG_TOL * (1 + t.real**2)
+    return np.where(real, wrap_angle(2 * np.arctan(t.real) + alpha0[:, None]), np.nan)
 
 
 def direct_kinematics_batch(rho, geometry=PAPER_GEOMETRY):
@@ -459,7 +466,7 @@ def _solve(rho, geometry):
         keep = (fit(after) < fit(before)) & ((moved < 1e-3 * geometry.scale) | ~regular[rough])
         candidate[np.flatnonzero(rough)[keep]] = after[keep]
     poses[rows, cols] = candidate
-    poses[..., 2] = np.angle(np.exp(1j * poses[..., 2]))
+    poses[..., 2] = wrap_angle(poses[..., 2])
     return np.isfinite(alpha).sum(axis=1).astype(np.uint8), poses
 
 
@@ -542,4 +549,4 @@ def degenerate_orientations(geometry=PAPER_GEOMETRY):
         return np.array([])
     phase = math.atan2(s1, c1)
     offset = math.acos(-c0 / amplitude)
-    return np.sort(np.angle(np.exp(1j * np.array([phase + offset, phase - offset]))))
+    return np.sort(wrap_angle(np.array([phase + offset, phase - offset])))

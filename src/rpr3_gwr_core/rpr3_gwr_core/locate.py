@@ -13,7 +13,7 @@ import numpy as np
 
 from .exceptions import (AssemblyModeError, InvalidInputError, NoSolutionError,
                          Rho1MismatchError, SingularityError)
-from .kinematics import _singularity_margin, direct_kinematics
+from .kinematics import _singularity_margin, direct_kinematics, wrap_angle
 from .mechanism import Mechanism
 
 __all__ = ["Location", "locate", "DEFAULT_ALPHA_TOL", "DEFAULT_MIN_MARGIN"]
@@ -97,7 +97,7 @@ def locate(roadmap, rho1, rho2, rho3, alpha, alpha_tol=DEFAULT_ALPHA_TOL,
     poses = direct_kinematics(rho, roadmap.geometry)
     if len(poses) == 0:
         raise NoSolutionError(f"no real direct-kinematic solution at rho = {values[:3]}")
-    off = np.abs(np.angle(np.exp(1j * (poses[:, 2] - alpha))))
+    off = np.abs(wrap_angle(poses[:, 2] - alpha))
     best = int(np.argmin(off))
     if off[best] > alpha_tol:
         nearest = ", ".join(f"{math.degrees(a):.2f}" for a in poses[:, 2])
@@ -127,7 +127,7 @@ def _slot_at_cell(roadmap, rho, pose, cell, tol=1e-6):
         return -1
     current, margin, _ = followed
     diff = field.poses[cell, : field.count[cell]] - np.array(current)
-    diff[:, 2] = np.angle(np.exp(1j * diff[:, 2])) * geometry.scale
+    diff[:, 2] = wrap_angle(diff[:, 2]) * geometry.scale
     dist = np.linalg.norm(diff, axis=1)
     slot = int(np.argmin(dist))
     same_side = np.sign(field.margin[cell, slot]) == np.sign(margin)

@@ -255,34 +255,45 @@ def _number_patches(field, region, component):
 
 
 def _describe_patches(field, region, patch, links):
-    gate_cells, singular_cells = {}, {}
-    shape_valid = field.valid
+    n = field.grid.size
+    # Boundary faces as keys pid * n + cell, so one np.unique sorts them by patch.
+    gate_keys, singular_keys = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
     for lo, up, match in links:
         for src, dst, forward in ((lo, up, match), (up, lo, _inverse(match))):
-            rows, slots = np.nonzero(shape_valid[src] & (patch[src] > 0))
-            own = patch[src[rows], slots]
+            rows, slots = np.nonzero(field.valid[src] & (patch[src] > 0))
+            own = patch[src[rows], slots].astype(np.int64)
             target = forward[rows, slots].astype(np.int64)
             continues = target >= 0
             other = np.where(continues, patch[dst[rows], np.maximum(target, 0)], 0)
             gate = continues & (other > 0) & (other != own)
             singular = ~continues | (other == 0)
-            for pid, cell in zip(own[gate], src[rows][gate]):
-                gate_cells.setdefault(int(pid), set()).add(int(cell))
-            for pid, cell in zip(own[singular], src[rows][singular]):
-                singular_cells.setdefault(int(pid), set()).add(int(cell))
-    patches = {}
+            gate_keys.append(own[gate] * n + src[rows][gate])
+            singular_keys.append(own[singular] * n + src[rows][singular])
+    gate_keys, singular_keys = np.unique(np.concatenate(gate_keys)), np.unique(
+        np.concatenate(singular_keys))
+
+    def of_patch(keys, pid):
+        lo, hi = np.searchsorted(keys, [pid * n, (pid + 1) * n])
+        return keys[lo:hi] - pid * n
+
+    cells_all, slots_all = np.nonzero(patch)
+    ids = patch[cells_all, slots_all]
+    order = np.argsort(ids, kind="stable")
+    ids, cells_all, slots_all = ids[order], cells_all[order], slots_all[order]
+    bounds = np.flatnonzero(np.diff(ids)) + 1
     aspect = field.aspect
-    for pid in np.unique(patch[patch > 0]):
-        cells, slots = np.nonzero(patch == pid)
+    patches = {}
+    for cells, slots in zip(np.split(cells_all, bounds), np.split(slots_all, bounds)):
+        if cells.size == 0:
+            continue
+        pid = int(patch[cells[0], slots[0]])
         aspects = np.unique(aspect[cells, slots])
         if aspects.size != 1:
             raise RuntimeError(f"patch {pid} mixes aspects {aspects}")
-        pid = int(pid)
         patches[pid] = Patch(
             id=pid, region=pid // 10, layer=pid % 10, aspect=int(aspects[0]),
             n_solutions=int(field.count[cells[0]]), cells=cells, slots=slots,
-            gate_cells=np.array(sorted(gate_cells.get(pid, ())), dtype=np.int64),
-            singular_cells=np.array(sorted(singular_cells.get(pid, ())), dtype=np.int64))
+            gate_cells=of_patch(gate_keys, pid), singular_cells=of_patch(singular_keys, pid))
     return patches
 
 
