@@ -19,7 +19,7 @@ from .kinematics import MAX_SOLUTIONS, _newton, _predict, _singularity_margin, w
 __all__ = ["neighbour_pairs", "match_solutions"]
 
 _CORRECTOR_STEPS = 4
-_SUBSTEPS = (1, 8, 64)
+_SUBSTEPS = (1, 16)
 # A continued pose that lands within this distance (relative to the
 # geometry's scale, orientation measured as arc length at that scale) of a
 # neighbour's solution is that solution.

@@ -377,11 +377,13 @@ def _real_roots(coeffs):
     """Real roots of trigonometric cubics, shape (n, 6) [rad], NaN-padded."""
     n = coeffs.shape[0]
     roots = np.full((n, MAX_SOLUTIONS), np.nan)
-    phi = 2 * np.pi * np.arange(_SAMPLES) / _SAMPLES
+    h = 2 * np.pi / _SAMPLES
+    phi = h * np.arange(_SAMPLES)
     values = coeffs @ _trig_basis(phi)
-    # |f'| <= sum k (|a_k| + |b_k|): a row whose samples all stay farther than
-    # that times half a sample interval from zero has no root at all.
-    reach = np.abs(coeffs) @ _HARMONICS.astype(float) * (np.pi / _SAMPLES)
+    # Between two samples f stays above their chord minus |f''| h**2 / 8, and
+    # |f''| <= sum k**2 (|a_k| + |b_k|): a row whose samples all stay farther
+    # than that from zero, on one side, has no root at all.
+    reach = np.abs(coeffs) @ (_HARMONICS**2).astype(float) * (h * h / 8)
     maybe = np.flatnonzero(~((values.min(axis=1) > reach) | (values.max(axis=1) < -reach)))
     if maybe.size:
         roots[maybe] = np.sort(_companion_roots(coeffs[maybe], phi, values[maybe]), axis=1)
