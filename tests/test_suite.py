@@ -71,6 +71,9 @@ class Suite:
         self.joint_states = []
         self.client.create_subscription(JointState, "joint_states", self.joint_states.append,
                                         qos_profile_sensor_data)
+        # Nodes added by tests; destroyed only after the executor stops, since
+        # destroying a node while another thread spins can break its wait set.
+        self.extra_nodes = []
         self.executor = MultiThreadedExecutor(num_threads=6, context=context)
         for node in (self.builder, self.planner, self.driver, self.recorder, self.client):
             self.executor.add_node(node)
@@ -96,9 +99,15 @@ class Suite:
         assert handle.accepted
         return _wait(handle.get_result_async(), timeout=120.0).result
 
+    def add(self, node):
+        self.extra_nodes.append(node)
+        self.executor.add_node(node)
+        return node
+
     def close(self):
         self.executor.shutdown(timeout_sec=5.0)
-        for node in (self.client, self.recorder, self.driver, self.planner, self.builder):
+        for node in (*self.extra_nodes, self.client, self.recorder, self.driver, self.planner,
+                     self.builder):
             node.destroy_node()
 
 
@@ -162,7 +171,7 @@ def test_whole_chain_plan_execute_record(suite):
     # The recorder wrote what the planner published; close the bag and read it.
     sent = [list(p.positions) for p in response.trajectory.points]
     suite.executor.remove_node(suite.recorder)
-    suite.recorder.destroy_node()
+    suite.recorder.close_bag()
     typestore = get_typestore(Stores.ROS2_JAZZY)
     with Reader(suite.recorder.bag_path) as reader:
         topics = {c.topic: c for c in reader.connections}
@@ -249,21 +258,15 @@ def test_late_subscriber_receives_the_roadmap(suite):
 
     late.create_subscription(NSolutionField, "field", keep("field"), LATCHED_QOS)
     late.create_subscription(WorkspaceRoadmap, "roadmap", keep("roadmap"), LATCHED_QOS)
-    suite.executor.add_node(late)
-    try:
-        assert done.wait(TIMEOUT)
-        assert len(received["roadmap"].patches) == 24
-        assert len(received["field"].n_solutions) == 401 * 401
-    finally:
-        suite.executor.remove_node(late)
-        late.destroy_node()
+    suite.add(late)
+    assert done.wait(TIMEOUT)
+    assert len(received["roadmap"].patches) == 24
+    assert len(received["field"].n_solutions) == 401 * 401
 
 
 def test_concurrent_clients_lose_no_request(suite):
-    clients = [Node(f"load_client_{k}", context=suite.context) for k in range(8)]
+    clients = [suite.add(Node(f"load_client_{k}", context=suite.context)) for k in range(8)]
     services = [c.create_client(PlanPath, "plan_path") for c in clients]
-    for c in clients:
-        suite.executor.add_node(c)
     outcomes = []
     lock = threading.Lock()
 
@@ -277,15 +280,10 @@ def test_concurrent_clients_lose_no_request(suite):
         with lock:
             outcomes.append(ok)
 
-    try:
-        assert all(s.wait_for_service(timeout_sec=TIMEOUT) for s in services)
-        threads = [threading.Thread(target=run, args=(s,)) for s in services]
-        for t in threads:
-            t.start()
-        for t in threads:
-            t.join(timeout=600.0)
-        assert outcomes == [100] * 8
-    finally:
-        for c in clients:
-            suite.executor.remove_node(c)
-            c.destroy_node()
+    assert all(s.wait_for_service(timeout_sec=TIMEOUT) for s in services)
+    threads = [threading.Thread(target=run, args=(s,)) for s in services]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=600.0)
+    assert outcomes == [100] * 8

@@ -68,11 +68,6 @@ class TrajectoryRecorder(Node):
             self.create_subscription(msg_type, topic, self._enqueue(topic), qos, raw=True)
         self.get_logger().info(f"recording {sorted(topics)} to {self.bag_path}")
 
-    def _enqueue(self, topic):
-        def put(raw):
-            self._queue.put((topic, self.get_clock().now().nanoseconds, raw))
-        return put
-
     def _write_loop(self, storage, topics, opened):
         writer = Writer(self.bag_path, version=9, storage_plugin=storage)
         writer.open()
@@ -88,11 +83,22 @@ class TrajectoryRecorder(Node):
         finally:
             writer.close()
 
-    def destroy_node(self):
+    def close_bag(self):
+        """Write what is queued and close the bag (its metadata included);
+        later messages are dropped.  Idempotent; destroy_node calls it."""
         if self._thread.is_alive():
             self._queue.put(None)
             self._thread.join()
             self.get_logger().info(f"closed {self.bag_path}: {self.counts}")
+
+    def _enqueue(self, topic):
+        def put(raw):
+            if self._thread.is_alive():
+                self._queue.put((topic, self.get_clock().now().nanoseconds, raw))
+        return put
+
+    def destroy_node(self):
+        self.close_bag()
         return super().destroy_node()
 
 
