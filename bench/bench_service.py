@@ -97,7 +97,8 @@ def main():
     executor = MultiThreadedExecutor(num_threads=4)
     for n in nodes:
         executor.add_node(n)
-    threading.Thread(target=executor.spin, daemon=True).start()
+    spinner = threading.Thread(target=executor.spin, daemon=True)
+    spinner.start()
     try:
         assert clients[0].wait_for_service(timeout_sec=120.0)
         deadline = time.monotonic() + 120.0
@@ -131,7 +132,8 @@ def main():
         print(json.dumps(dict(_summary(merged, wall), clients=len(clients),
                               failures=len(clients) * args.requests - len(merged))))
     finally:
-        executor.shutdown()
+        executor.shutdown(timeout_sec=10.0)
+        spinner.join(timeout=10.0)
         for n in nodes:
             n.destroy_node()
         rclpy.try_shutdown()

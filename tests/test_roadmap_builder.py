@@ -42,6 +42,7 @@ def test_builder_rebuilds_on_rho1_and_refuses_bad_grids(ros_context):
         assert fields[-1].grid.rho1 == 13.0
         assert builder.roadmap.grid.rho1 == 13.0
     finally:
-        executor.shutdown()
+        executor.shutdown(timeout_sec=10.0)
+        spinner.join(timeout=10.0)
         listener.destroy_node()
         builder.destroy_node()

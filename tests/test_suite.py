@@ -105,7 +105,8 @@ class Suite:
         return node
 
     def close(self):
-        self.executor.shutdown(timeout_sec=5.0)
+        self.executor.shutdown(timeout_sec=10.0)
+        self.thread.join(timeout=10.0)
         for node in (*self.extra_nodes, self.client, self.recorder, self.driver, self.planner,
                      self.builder):
             node.destroy_node()

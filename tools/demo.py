@@ -147,7 +147,8 @@ def main():
             (OUT / f"{name}.json").write_text(json.dumps(data))
             plan_figure(roadmap, data).savefig(OUT / f"{name}.png", dpi=110)
     finally:
-        executor.shutdown()
+        executor.shutdown(timeout_sec=10.0)
+        spinner.join(timeout=10.0)
         node.destroy_node()
         rclpy.try_shutdown()
         for process in processes:
