@@ -18,7 +18,7 @@ from .roadmap import build_roadmap
 __all__ = ["default_cache_dir", "cache_key", "cached_roadmap"]
 
 # Bump when a change of the algorithms changes roadmaps, so old entries are not reused.
-ALGORITHM_REVISION = 1
+ALGORITHM_REVISION = 2
 
 
 def default_cache_dir():

@@ -111,11 +111,12 @@ class Grid:
         index = []
         for value, (lo, _), n in ((rho2, self.rho2_range, self.shape[0]),
                                   (rho3, self.rho3_range, self.shape[1])):
-            k = int(round((value - lo) / self.step))
-            if not 0 <= k < n:
+            # Compared as floats first: a huge leg would overflow int().
+            k = (value - lo) / self.step
+            if not -0.5 <= k < n - 0.5:
                 raise OutOfGridError(f"({rho2}, {rho3}) lies outside the grid "
                                      f"rho2 {self.rho2_range}, rho3 {self.rho3_range}")
-            index.append(k)
+            index.append(min(int(round(k)), n - 1))
         return index[0] * self.shape[1] + index[1]
 
     def cells_of(self, rho2, rho3):

@@ -21,7 +21,8 @@ import numpy as np
 
 from .exceptions import InvalidInputError
 
-__all__ = ["Feasibility", "GlobalPath", "RoadmapIndex", "feasibility", "global_paths"]
+__all__ = ["Feasibility", "GlobalPath", "RoadmapIndex", "feasibility", "global_paths",
+           "longer_paths"]
 
 NARROW_PENALTY = 1.0
 
@@ -157,3 +158,25 @@ def global_paths(index, start_patch, goal_patch, weighted=False, max_paths=8):
     ranked = sorted((GlobalPath(tuple(p), index.path_cost(p)) for p in paths),
                     key=lambda g: (g.cost, g.patches))
     return ranked[:max_paths]
+
+
+def longer_paths(index, start_patch, goal_patch):
+    """Every simple global path between two patches, fewest gates first.
+
+    For the planner's fallback when every path of :func:`global_paths`
+    fails locally; lazy, so only the paths taken are computed.
+
+    Parameters
+    ----------
+    index : RoadmapIndex
+    start_patch, goal_patch : int
+
+    Yields
+    ------
+    GlobalPath
+    """
+    _check(index, start_patch, goal_patch)
+    if index.component[start_patch] != index.component[goal_patch]:
+        return
+    for path in nx.shortest_simple_paths(index.graph, start_patch, goal_patch):
+        yield GlobalPath(tuple(path), index.path_cost(path))

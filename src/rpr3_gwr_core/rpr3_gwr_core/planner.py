@@ -8,16 +8,17 @@ is tried along the next global path, and is an error when none passes.
 """
 
 from dataclasses import dataclass, field as dataclass_field
+import itertools
 import math
 
 import numpy as np
 
 from .exceptions import InfeasiblePathError, InvalidInputError, ValidationError
-from .global_planning import RoadmapIndex, feasibility, global_paths
+from .global_planning import RoadmapIndex, feasibility, global_paths, longer_paths
 from .local_planning import DEFAULT_CLEARANCE_WEIGHT, LocalPlanner
-from .locate import DEFAULT_ALPHA_TOL, DEFAULT_MIN_MARGIN, locate
+from .locate import DEFAULT_ALPHA_TOL, locate
 from .trajectory import chaikin, shortcut, time_parameterize
-from .validation import DEFAULT_MAX_STEP, validate_path
+from .validation import DEFAULT_MAX_STEP, DEFAULT_MIN_MARGIN, validate_path
 
 __all__ = ["PlanOptions", "Plan", "Planner"]
 
@@ -26,6 +27,9 @@ _SMOOTH_CLEARANCE = 3.0
 _SAMPLES_PER_CELL = 5
 # Local re-plans around steps the validator refused, per global path.
 _REPAIRS = 4
+# Global paths tried, the listed ones included, before a plan fails: when
+# every shortest path fails locally, longer ones may still pass.
+_MAX_GLOBAL_ATTEMPTS = 16
 
 
 @dataclass(frozen=True)
@@ -60,10 +64,12 @@ class PlanOptions:
     def __post_init__(self):
         limits = (self.max_velocity, self.max_acceleration)
         if (limits[0] is None) != (limits[1] is None):
-            raise InvalidInputError("give both max_velocity and max_acceleration, or neither")
-        for value in limits:
+            raise InvalidInputError("give both max_velocity and max_acceleration, or neither: "
+                                    f"got max_velocity = {limits[0]}, "
+                                    f"max_acceleration = {limits[1]}")
+        for name, value in zip(("max_velocity", "max_acceleration"), limits):
             if value is not None and not (math.isfinite(value) and value > 0):
-                raise InvalidInputError(f"velocity and acceleration limits must be positive, got {value}")
+                raise InvalidInputError(f"{name} must be positive and finite, got {value}")
         if not (math.isfinite(self.alpha_tol) and self.alpha_tol > 0):
             raise InvalidInputError(f"alpha_tol must be positive, got {self.alpha_tol}")
         if int(self.max_paths) < 1:
@@ -165,7 +171,7 @@ class Planner:
         if len(configuration) != 4:
             raise InvalidInputError("a configuration is (rho1, rho2, rho3, alpha)")
         return locate(self.roadmap, *configuration, alpha_tol=alpha_tol,
-                      min_margin=self.min_margin)
+                      min_margin=self.min_margin, max_step=self.max_step)
 
     def plan(self, start, goal, options=PlanOptions()):
         """Plan from one configuration to another.
@@ -184,7 +190,8 @@ class Planner:
         ------
         GWRError
             ``InfeasiblePathError`` (with ``.reason``) when the roadmap has no
-            path, ``ValidationError`` when no path passes the validator, or
+            path, ``ValidationError`` when no path passes the validator,
+            ``InvalidInputError`` when the limits cannot time the path, or
             the locating errors of :func:`~rpr3_gwr_core.locate.locate`.
         """
         s = self.locate(start, options.alpha_tol)
@@ -199,8 +206,12 @@ class Planner:
         if options.feasibility_only:
             return Plan(True, answer.reason, s, g, paths)
         failures = []
-        for k, path in enumerate(paths):
-            result, rho, patches, local = self._validated_path(path, s, g)
+        for k, path in enumerate(self._attempts(paths, s.patch, g.patch)):
+            try:
+                result, rho, patches, local = self._validated_path(path, s, g)
+            except InfeasiblePathError as exc:
+                failures.append(f"path {list(path.patches)}: {exc}")
+                continue
             if not result.ok:
                 failures.append(f"path {list(path.patches)}: {result.reason}")
                 continue
@@ -219,6 +230,18 @@ class Planner:
                         velocities=timing[1], accelerations=timing[2], validation=result,
                         smoothed=smoothed)
         raise ValidationError("no global path gave a valid trajectory: " + "; ".join(failures))
+
+    def _attempts(self, paths, start_patch, goal_patch):
+        """The listed global paths, then longer ones, ``_MAX_GLOBAL_ATTEMPTS`` in all;
+        a longer path that is tried is appended to ``paths`` so a plan can
+        point at it."""
+        yield from paths[:_MAX_GLOBAL_ATTEMPTS]
+        listed = {p.patches for p in paths}
+        extra = (p for p in longer_paths(self.index, start_patch, goal_patch)
+                 if p.patches not in listed)
+        for path in itertools.islice(extra, max(0, _MAX_GLOBAL_ATTEMPTS - len(paths))):
+            paths.append(path)
+            yield path
 
     def _validated_path(self, path, s, g):
         """Local path along a global path that passes the validator.

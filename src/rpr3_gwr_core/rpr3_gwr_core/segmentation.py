@@ -7,24 +7,31 @@ Definitions (paper sections 2 to 4):
   (:mod:`~rpr3_gwr_core.continuity`).  Regions are numbered 1..R by
   decreasing number of cells (ties: lowest first cell), which reproduces the
   numbering of the paper's figure 6.
-* Ill-conditioned cells.  Right on the singular locus a straight step between
-  two cells can cross a fold and come back, so a few cells there link to none
-  of their same-count neighbours and would form regions of one or two cells.
-  Rule: a connected set of fewer than ``min_region_cells`` cells (default 8,
-  far below the 100-cell smallest region of the paper's case) is part of the
-  singular locus: its cells get region 0 and belong to no patch, so no path
-  is planned through them.
+* Unresolved cells.  Right on the singular locus a straight step between two
+  cells can cross a fold and come back, and a sliver of the field thinner
+  than a cell (a fold pair that is real over a tongue narrower than the step)
+  shows up as isolated cells; either way a few cells form connected sets of
+  one or two cells.  Rule: a connected set of fewer than ``min_region_cells``
+  cells (default 8, far below the 100-cell smallest region of the paper's
+  case) is no region: its cells get region 0.
 * A *patch* is one solution sheet over a region: the solutions of the region's
   cells connected by continuation.  Its id is ``10 * region + layer``; layers
   are numbered 1..n in the order of the sheets' orientations alpha at the
   region's first cell (lowest flat index), taken in [-pi, pi) after the
   sheets are sorted by aspect, negative first.  (With ten or more solutions
   the scheme would clash; the 3-RPR has at most six.)
-* A *gate* joins two patches of different regions whose solutions continue
-  into each other across a face; a patch's *singular boundary* is the set of
-  its faces through which its solution does not continue (it vanishes into a
-  fold, or into the ill-conditioned cells above).  Faces on the edge of the
-  grid are neither.
+* Only the ill-conditioned solutions of unresolved cells are dropped: a set of
+  their solutions connected by continuation joins the patch it continues
+  into (the one it has most links with; ties: lowest id), since its sheet is
+  that patch's sheet, unless the patch already covers one of its cells (then
+  the next patch it continues into; sets are taken best-conditioned first);
+  a set that continues into no patch (the fold pair of a sliver, which
+  vanishes on every side) belongs to no patch, so no path is planned through
+  it.  A patch may therefore hold a few cells of region 0.
+* A *gate* joins two patches whose solutions continue into each other across
+  a face; a patch's *singular boundary* is the set of its faces through which
+  its solution does not continue (it vanishes into a fold, or into the
+  dropped solutions above).  Faces on the edge of the grid are neither.
 
 Patches are defined by the rotary disk search (``method="rds"``,
 :mod:`~rpr3_gwr_core.rotary_disk`).  The default ``method="components"``
@@ -166,7 +173,7 @@ def segment(field, method="components", min_region_cells=8):
         component = _components_by_rds(valid, disk_links, len(field.grid.shape))
     else:
         component = _components_by_csgraph(valid, disk_links, n_disks)
-    patch = _number_patches(field, region, component)
+    patch = _absorb_unresolved(field, region, _number_patches(field, region, component), links)
     patches = _describe_patches(field, region, patch, links)
     gates = _gates(field, patch, links)
     return Segmentation(field=field, region=region, patch=patch, patches=patches, gates=gates,
@@ -254,6 +261,47 @@ def _number_patches(field, region, component):
     return patch
 
 
+def _absorb_unresolved(field, region, patch, links):
+    """Patch ids for the solutions of unresolved cells (rule in module doc)."""
+    unresolved = (field.valid & (region[:, None] == 0)).ravel()
+    if not unresolved.any():
+        return patch
+    ends = [(lo[rows] * MAX_SOLUTIONS + slots,
+             up[rows] * MAX_SOLUTIONS + match[rows, slots].astype(np.int64))
+            for lo, up, match in links for rows, slots in [np.nonzero(match >= 0)]]
+    a = np.concatenate([a for a, _ in ends])
+    b = np.concatenate([b for _, b in ends])
+    inner = unresolved[a] & unresolved[b]
+    graph = sparse.coo_matrix((np.ones(int(inner.sum()), dtype=np.int8), (a[inner], b[inner])),
+                              shape=(patch.size, patch.size))
+    _, label = connected_components(graph, directed=False)
+    edge = unresolved[a] != unresolved[b]
+    source = np.where(unresolved[a[edge]], a[edge], b[edge])
+    target = patch.ravel()[np.where(unresolved[a[edge]], b[edge], a[edge])]
+    known = target > 0
+    votes, counts = np.unique(np.stack([label[source[known]], target[known]], axis=1), axis=0,
+                              return_counts=True)
+    out = patch.copy()
+    margin = np.abs(field.margin).ravel()
+    disks = np.flatnonzero(unresolved)
+    candidates = {}
+    for (set_label, pid), n in zip(votes.tolist(), counts.tolist()):
+        candidates.setdefault(set_label, []).append((-n, pid))
+    # Where a sheet folds over itself (an S-shaped sliver), two sets continue
+    # into one patch over the same cells; a patch covers a cell once, so the
+    # better-conditioned set joins it first and the other tries its next patch.
+    sets = {k: disks[label[disks] == k] for k in candidates}
+    for set_label in sorted(sets, key=lambda k: (-margin[sets[k]].min(), k)):
+        cells, slots = np.divmod(sets[set_label], MAX_SOLUTIONS)
+        if np.unique(cells).size != cells.size:
+            continue
+        for _, pid in sorted(candidates[set_label]):
+            if not np.any(out[cells] == pid):
+                out[cells, slots] = pid
+                break
+    return out
+
+
 def _describe_patches(field, region, patch, links):
     n = field.grid.size
     # Boundary faces as keys pid * n + cell, so one np.unique sorts them by patch.
@@ -290,9 +338,10 @@ def _describe_patches(field, region, patch, links):
         aspects = np.unique(aspect[cells, slots])
         if aspects.size != 1:
             raise RuntimeError(f"patch {pid} mixes aspects {aspects}")
+        own_region = cells[region[cells] == pid // 10]
         patches[pid] = Patch(
             id=pid, region=pid // 10, layer=pid % 10, aspect=int(aspects[0]),
-            n_solutions=int(field.count[cells[0]]), cells=cells, slots=slots,
+            n_solutions=int(field.count[own_region[0]]), cells=cells, slots=slots,
             gate_cells=of_patch(gate_keys, pid), singular_cells=of_patch(singular_keys, pid))
     return patches
 
@@ -311,7 +360,7 @@ def _gates(field, patch, links):
         rows, slots = np.nonzero(match >= 0)
         a = patch[lo[rows], slots]
         b = patch[up[rows], match[rows, slots].astype(np.int64)]
-        crossing = (a > 0) & (b > 0) & (a // 10 != b // 10)
+        crossing = (a > 0) & (b > 0) & (a != b)
         for pa, pb, ca, cb in zip(a[crossing], b[crossing], lo[rows][crossing], up[rows][crossing]):
             key = (int(min(pa, pb)), int(max(pa, pb)))
             faces.setdefault(key, []).append((ca, cb) if pa < pb else (cb, ca))

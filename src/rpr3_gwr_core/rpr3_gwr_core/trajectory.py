@@ -113,6 +113,13 @@ def time_parameterize(rho_path, max_velocity, max_acceleration):
         differences of the velocities (one-sided at the ends).  Where one
         would exceed ``max_acceleration`` the speed there is lowered and the
         profile recomputed, so all of them respect it.
+
+    Raises
+    ------
+    InvalidInputError
+        If a limit is not positive and finite, or the limits are so far from
+        the path's scale that the times or derivatives are not finite or the
+        times do not increase strictly.
     """
     if not (math.isfinite(max_velocity) and max_velocity > 0
             and math.isfinite(max_acceleration) and max_acceleration > 0):
@@ -136,19 +143,28 @@ def time_parameterize(rho_path, max_velocity, max_acceleration):
     with np.errstate(divide="ignore"):
         cap[1:-1] = np.minimum(cap[1:-1], np.sqrt(half * span / turn))
     cap[0] = cap[-1] = 0.0
-    for _ in range(_MAX_REFINEMENTS):
-        speed = _speed_profile(cap, length, half)
-        times = _times(speed, length, half)
-        velocities = _velocities(rho_path, times)
-        accelerations = _differences(velocities, times)
-        excess = np.max(np.abs(accelerations), axis=1) / max_acceleration
-        if np.all(excess <= 1.0):
-            break
-        # Lower the speed around each offending waypoint and try again.
-        over = np.flatnonzero(excess > 1.0)
-        for k in (over - 1, over, over + 1):
-            k = k[(k >= 0) & (k < n)]
-            cap[k] = np.minimum(cap[k], speed[k] / np.sqrt(np.maximum(excess[k], 1.0)) * 0.9)
+    # Extreme limits overflow or underflow in here; the result is checked below.
+    with np.errstate(all="ignore"):
+        for _ in range(_MAX_REFINEMENTS):
+            speed = _speed_profile(cap, length, half)
+            times = _times(speed, length, half)
+            velocities = _velocities(rho_path, times)
+            accelerations = _differences(velocities, times)
+            excess = np.max(np.abs(accelerations), axis=1) / max_acceleration
+            if np.all(excess <= 1.0):
+                break
+            # Lower the speed around each offending waypoint and try again.
+            over = np.flatnonzero(excess > 1.0)
+            for k in (over - 1, over, over + 1):
+                k = k[(k >= 0) & (k < n)]
+                cap[k] = np.minimum(cap[k], speed[k] / np.sqrt(np.maximum(excess[k], 1.0)) * 0.9)
+    # Limits far from the path's scale (1e-300, 1e300) overflow or underflow
+    # the profile: such a request cannot be timed, and must not look timed.
+    if not (np.all(np.isfinite(times)) and np.all(np.diff(times) > 0)
+            and np.all(np.isfinite(velocities)) and np.all(np.isfinite(accelerations))):
+        raise InvalidInputError(
+            f"max_velocity = {max_velocity:g} and max_acceleration = {max_acceleration:g} cannot "
+            f"time this path in floating point (duration {times[-1]:g} s)")
     return times, velocities, accelerations
 
 

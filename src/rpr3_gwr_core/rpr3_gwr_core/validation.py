@@ -22,12 +22,15 @@ import math
 import numpy as np
 
 from .exceptions import InvalidInputError
-from .locate import DEFAULT_MIN_MARGIN
 from .mechanism import Mechanism
 
-__all__ = ["Validation", "validate_path", "DEFAULT_MAX_STEP"]
+__all__ = ["Validation", "validate_path", "DEFAULT_MAX_STEP", "DEFAULT_MIN_MARGIN"]
 
 DEFAULT_MAX_STEP = 0.0625
+# Normalised |det Jx| (kinematics.singularity_margin) below which a
+# configuration counts as singular: the platform's orientation then moves
+# more than about a thousand times faster than at a well-conditioned pose.
+DEFAULT_MIN_MARGIN = 1e-3
 _MAX_HALVINGS = 8
 _FINE_MARGIN = 0.05
 _GOAL_TOL = 1e-6
