@@ -140,7 +140,7 @@ def time_parameterize(rho_path, max_velocity, max_acceleration):
     turn = np.max(np.abs(direction[1:] - direction[:-1]), axis=1)
     span = 0.5 * (length[1:] + length[:-1])
     half = 0.5 * max_acceleration
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):
         cap[1:-1] = np.minimum(cap[1:-1], np.sqrt(half * span / turn))
     cap[0] = cap[-1] = 0.0
     # Extreme limits overflow or underflow in here; the result is checked below.

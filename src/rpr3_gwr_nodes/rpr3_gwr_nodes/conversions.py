@@ -22,12 +22,26 @@ from rpr3_gwr_msgs.msg import Grid as GridMsg
 from rpr3_gwr_msgs.msg import NSolutionField as NSolutionFieldMsg
 from rpr3_gwr_msgs.msg import WorkspacePatch, WorkspaceRoadmap
 
-__all__ = ["duration_msg", "geometry_to_msg", "geometry_from_msg", "grid_to_msg", "grid_from_msg",
-           "roadmap_to_msgs", "roadmap_from_msgs"]
+__all__ = ["MAX_DURATION", "duration_msg", "geometry_to_msg", "geometry_from_msg",
+           "grid_to_msg", "grid_from_msg", "roadmap_to_msgs", "roadmap_from_msgs"]
+
+
+# builtin_interfaces/Duration holds int32 seconds.
+MAX_DURATION = 2**31 - 1
 
 
 def duration_msg(seconds):
-    """A builtin_interfaces/Duration of a non-negative number of seconds."""
+    """A builtin_interfaces/Duration of a non-negative number of seconds.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``seconds`` is negative, not finite or beyond what the message
+        holds (``MAX_DURATION`` seconds).
+    """
+    if not 0.0 <= seconds < MAX_DURATION:
+        raise InvalidInputError(f"a duration of {seconds:g} s does not fit "
+                                f"builtin_interfaces/Duration (0 to {MAX_DURATION} s)")
     nanoseconds = int(round(seconds * 1e9))
     return Duration(sec=nanoseconds // 1_000_000_000, nanosec=nanoseconds % 1_000_000_000)
 

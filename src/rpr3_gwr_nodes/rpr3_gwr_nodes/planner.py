@@ -7,29 +7,32 @@ messages replaces the state atomically; requests in flight finish on the
 state they started with.
 
 Serves ``plan_path`` (rpr3_gwr_msgs/PlanPath) from a reentrant callback group
-on a multithreaded executor, so several requests run at once.  Every error of
-the core becomes the response's error code and message; the node never dies
-on a request.  Each planned trajectory is also published on
-``planned_trajectory`` (trajectory_msgs/JointTrajectory) for recording and
-display.
+on a multithreaded executor, so several requests run at once.  Every step of a
+request, the conversion of the answer to messages included, runs inside the
+error mapping: an error of the core becomes the response's error code and
+message, anything else ``ERROR_INTERNAL``, and the node never dies on a
+request.  Each response names the roadmap that answered it (its stamp and
+rho1).  Each planned trajectory is also published on ``planned_trajectory``
+(trajectory_msgs/JointTrajectory) for recording and display.
 """
 
 import math
 import threading
 import time
 
+import numpy as np
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
-from rpr3_gwr_core.exceptions import GWRError
+from rpr3_gwr_core.exceptions import GWRError, InvalidInputError
 from rpr3_gwr_core.planner import PlanOptions, Planner
 from rpr3_gwr_msgs.msg import GlobalPath, NSolutionField, PlatformPose, WorkspaceRoadmap
 from rpr3_gwr_msgs.srv import PlanPath
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-from .conversions import duration_msg, roadmap_from_msgs
+from .conversions import MAX_DURATION, duration_msg, roadmap_from_msgs
 from .spin import run
 from .roadmap_builder import LATCHED_QOS
 
@@ -49,17 +52,40 @@ ERROR_CODES = {
 
 
 def plan_to_trajectory(plan, header):
-    """A core plan's leg path as a JointTrajectory (times, velocities and
-    accelerations when the plan is time-parameterised)."""
+    """A core plan's leg path as a JointTrajectory with times, velocities and
+    accelerations.
+
+    Raises
+    ------
+    InvalidInputError
+        If the plan's times do not fit builtin_interfaces/Duration or two of
+        them fall within one nanosecond (limits far too high or too low).
+    """
+    times = np.asarray(plan.times, dtype=float)
+    if times[-1] >= MAX_DURATION:
+        raise InvalidInputError(
+            f"the limits give a trajectory of {times[-1]:.3g} s, beyond the "
+            f"{MAX_DURATION} s that builtin_interfaces/Duration holds: raise them")
+    if np.any(np.diff(np.round(times * 1e9)) <= 0):
+        raise InvalidInputError("the limits are so high that two waypoints are less than 1 ns "
+                                "apart, so time stamps would not increase: lower them")
     trajectory = JointTrajectory(header=header, joint_names=list(JOINT_NAMES))
     for k, rho in enumerate(plan.rho):
-        point = JointTrajectoryPoint(positions=[float(v) for v in rho])
-        if plan.times is not None:
-            point.velocities = [float(v) for v in plan.velocities[k]]
-            point.accelerations = [float(v) for v in plan.accelerations[k]]
-            point.time_from_start = duration_msg(float(plan.times[k]))
-        trajectory.points.append(point)
+        trajectory.points.append(JointTrajectoryPoint(
+            positions=[float(v) for v in rho],
+            velocities=[float(v) for v in plan.velocities[k]],
+            accelerations=[float(v) for v in plan.accelerations[k]],
+            time_from_start=duration_msg(float(times[k]))))
     return trajectory
+
+
+class _State:
+    """A planner and the stamp of the roadmap messages it was built from,
+    swapped as one reference."""
+
+    def __init__(self, planner, stamp):
+        self.planner = planner
+        self.stamp = stamp
 
 
 class PlannerNode(Node):
@@ -74,7 +100,7 @@ class PlannerNode(Node):
         self.declare_parameter("default_max_acceleration", 2.0, ParameterDescriptor(
             description="Joint acceleration limit used when a request gives none "
                         "[length unit/s^2]", floating_point_range=positive))
-        self._planner = None
+        self._state = None
         self._messages = {}
         updates = MutuallyExclusiveCallbackGroup()
         self.create_subscription(NSolutionField, "field", self._on_field, LATCHED_QOS,
@@ -89,7 +115,8 @@ class PlannerNode(Node):
     @property
     def planner(self):
         """The planning state requests use now (None before a roadmap)."""
-        return self._planner
+        state = self._state
+        return None if state is None else state.planner
 
     def _on_field(self, msg):
         self._messages["field"] = msg
@@ -109,62 +136,86 @@ class PlannerNode(Node):
         except GWRError as exc:
             self.get_logger().error(f"ignoring an inconsistent roadmap: {exc}")
             return
-        self._planner = planner  # one reference assignment: atomic for the service threads
+        # One reference assignment: atomic for the service threads, and a
+        # request keeps the state it started with.
+        self._state = _State(planner, roadmap.header.stamp)
         self._messages.clear()
         grid = planner.roadmap.grid
+        stamp = roadmap.header.stamp
         self.get_logger().info(
-            f"planning on a new roadmap: rho1 = {grid.rho1:g}, {len(planner.roadmap.graph)} "
-            f"patches, ready in {time.perf_counter() - start:.3f} s")
+            f"planning on a new roadmap (stamp {stamp.sec}.{stamp.nanosec:09d}): "
+            f"rho1 = {grid.rho1:g}, {len(planner.roadmap.graph)} patches, ready in "
+            f"{time.perf_counter() - start:.3f} s")
         self.ready.set()
 
     def _options(self, request):
+        """PlanOptions of a request; 0 and 0 limits take the node's defaults,
+        one limit alone is refused by PlanOptions."""
         limits = (request.max_velocity, request.max_acceleration)
         if limits == (0.0, 0.0):
             limits = (self.get_parameter("default_max_velocity").value,
                       self.get_parameter("default_max_acceleration").value)
+        limits = [None if v == 0.0 else v for v in limits]
         tolerance = request.alpha_tolerance or math.radians(1.0)
         return PlanOptions(smooth=request.smooth, weighted=request.weighted,
                            feasibility_only=request.feasibility_only, max_velocity=limits[0],
                            max_acceleration=limits[1], alpha_tol=tolerance)
 
     def _on_plan(self, request, response):
-        planner = self._planner
-        if planner is None:
-            response.error_code = PlanPath.Response.ERROR_NO_ROADMAP
-            response.error_msg = "no roadmap received yet on 'field' and 'roadmap'"
-            return response
+        state = self._state
         try:
-            options = self._options(request)
-            start = (request.start.rho1, request.start.rho2, request.start.rho3, request.start.alpha)
-            goal = (request.goal.rho1, request.goal.rho2, request.goal.rho3, request.goal.alpha)
-            plan = planner.plan(start, goal, options)
+            if state is None:
+                return _error(response, PlanPath.Response.ERROR_NO_ROADMAP,
+                              "no roadmap received yet on 'field' and 'roadmap'")
+            return self._answer(request, state)
         except GWRError as exc:
-            response.error_code = ERROR_CODES.get(exc.code, PlanPath.Response.ERROR_INTERNAL)
-            response.error_msg = str(exc)
-            response.feasibility = getattr(exc, "reason", "")
-            return response
+            code = ERROR_CODES.get(exc.code, PlanPath.Response.ERROR_INTERNAL)
+            return _error(_named(state), code, str(exc), getattr(exc, "reason", ""))
         except Exception as exc:  # a bug must not take the service down
             self.get_logger().error(f"internal error on a plan request: {exc!r}")
-            response.error_code = PlanPath.Response.ERROR_INTERNAL
-            response.error_msg = f"internal error: {exc!r}"
-            return response
-        response.success = True
-        response.error_code = PlanPath.Response.ERROR_NONE
+            return _error(_named(state), PlanPath.Response.ERROR_INTERNAL,
+                          f"internal error: {exc!r}")
+
+    def _answer(self, request, state):
+        options = self._options(request)
+        start = (request.start.rho1, request.start.rho2, request.start.rho3, request.start.alpha)
+        goal = (request.goal.rho1, request.goal.rho2, request.goal.rho3, request.goal.alpha)
+        plan = state.planner.plan(start, goal, options)
+        response = _named(state)
         response.feasibility = plan.reason
         response.global_paths = [GlobalPath(patch_ids=list(g.patches), cost=g.cost)
                                  for g in plan.global_paths]
-        if options.feasibility_only:
-            return response
-        response.path_index = plan.path_index
-        response.trajectory = plan_to_trajectory(plan, self._header())
-        response.poses = [PlatformPose(x=float(p[0]), y=float(p[1]), alpha=float(p[2]))
-                          for p in plan.poses]
-        response.min_singularity_margin = float(plan.validation.min_margin)
-        self.trajectory_pub.publish(response.trajectory)
+        if not options.feasibility_only:
+            response.path_index = plan.path_index
+            response.trajectory = plan_to_trajectory(plan, self._header())
+            response.poses = [PlatformPose(x=float(p[0]), y=float(p[1]), alpha=float(p[2]))
+                              for p in plan.poses]
+            response.min_singularity_margin = float(plan.validation.min_margin)
+        response.success = True
+        response.error_code = PlanPath.Response.ERROR_NONE
+        if not options.feasibility_only:
+            self.trajectory_pub.publish(response.trajectory)
         return response
 
     def _header(self):
         return Header(stamp=self.get_clock().now().to_msg(), frame_id="rpr3_base")
+
+
+def _named(state):
+    """An empty response naming the roadmap that answers it."""
+    response = PlanPath.Response()
+    if state is not None:
+        response.roadmap_stamp = state.stamp
+        response.roadmap_rho1 = state.planner.roadmap.grid.rho1
+    return response
+
+
+def _error(response, code, message, feasibility=""):
+    response.success = False
+    response.error_code = code
+    response.error_msg = message
+    response.feasibility = feasibility
+    return response
 
 
 def main(args=None):

@@ -1,0 +1,242 @@
+"""The planner node under hostile requests: every request gets an answer with
+a code from the list, every success is a sound trajectory, the node keeps
+serving.  Real rclpy and Fast DDS: a planner node, a publisher of the
+paper's roadmap messages and a client, spun by one executor thread."""
+
+import collections
+import math
+import threading
+
+import numpy as np
+import pytest
+import rclpy
+from hypothesis import HealthCheck, given, settings, strategies as st
+from rclpy.executors import MultiThreadedExecutor
+from rclpy.node import Node
+from rpr3_gwr_core.kinematics import direct_kinematics
+from rpr3_gwr_core.roadmap import build_roadmap
+from rpr3_gwr_msgs.msg import Configuration, NSolutionField, WorkspaceRoadmap
+from rpr3_gwr_msgs.srv import PlanPath
+from rpr3_gwr_nodes.conversions import roadmap_to_msgs
+from rpr3_gwr_nodes.planner import PlannerNode
+from rpr3_gwr_nodes.roadmap_builder import LATCHED_QOS
+from std_msgs.msg import Header
+
+D = math.radians
+Q1, Q2 = (17.0, 12.0, 18.0, D(122.82)), (17.0, 10.0, 25.0, D(-24.24))
+MODE_A, MODE_B = (17.0, 20.0, 25.0, D(29.47)), (17.0, 20.0, 25.0, D(96.13))
+TIMEOUT = 30.0
+CODES = {getattr(PlanPath.Response, name): name for name in dir(PlanPath.Response)
+         if name.startswith("ERROR_")}
+FUZZ_REQUESTS = 500
+
+
+def _configuration(values):
+    return Configuration(rho1=values[0], rho2=values[1], rho3=values[2], alpha=values[3])
+
+
+class PlannerUnderTest:
+    """A planner node fed the paper's roadmap messages, and a client."""
+
+    def __init__(self, context):
+        self.stamp = Header(frame_id="rpr3_base")
+        self.stamp.stamp.sec, self.stamp.stamp.nanosec = 1_700_000_000, 123
+        field_msg, roadmap_msg = roadmap_to_msgs(build_roadmap(), self.stamp)
+        self.planner = PlannerNode(context=context)
+        self.feeder = Node("roadmap_feeder", context=context)
+        self.feeder.create_publisher(NSolutionField, "field", LATCHED_QOS).publish(field_msg)
+        self.feeder.create_publisher(WorkspaceRoadmap, "roadmap", LATCHED_QOS).publish(roadmap_msg)
+        self.client = Node("planner_test_client", context=context)
+        self.plan_client = self.client.create_client(PlanPath, "plan_path")
+        self.executor = MultiThreadedExecutor(num_threads=4, context=context)
+        for node in (self.planner, self.feeder, self.client):
+            self.executor.add_node(node)
+        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
+        self.thread.start()
+        assert self.planner.ready.wait(60.0), "the planner got no roadmap"
+        assert self.plan_client.wait_for_service(timeout_sec=TIMEOUT)
+
+    def call(self, request, timeout=TIMEOUT):
+        future = self.plan_client.call_async(request)
+        done = threading.Event()
+        future.add_done_callback(lambda _: done.set())
+        assert done.wait(timeout), f"no answer within {timeout} s to {request}"
+        return future.result()
+
+    def plan(self, start, goal, **options):
+        return self.call(PlanPath.Request(start=_configuration(start), goal=_configuration(goal),
+                                          **options))
+
+    def close(self):
+        self.executor.shutdown(timeout_sec=10.0)
+        self.thread.join(timeout=10.0)
+        for node in (self.client, self.feeder, self.planner):
+            node.destroy_node()
+
+
+@pytest.fixture(scope="module")
+def service():
+    from rclpy.context import Context
+
+    context = Context()
+    rclpy.init(context=context)
+    running = PlannerUnderTest(context)
+    try:
+        yield running
+    finally:
+        running.close()
+        rclpy.try_shutdown(context=context)
+
+
+def _seconds(point):
+    return point.time_from_start.sec + point.time_from_start.nanosec * 1e-9
+
+
+def check_sound(request, response, stamp):
+    """The contract of every answer (the fuzz test's assertions)."""
+    assert response.error_code in CODES, response.error_code
+    if response.error_code != PlanPath.Response.ERROR_NO_ROADMAP:
+        assert response.roadmap_stamp == stamp.stamp and response.roadmap_rho1 == 17.0
+    if not response.success:
+        assert response.error_code != PlanPath.Response.ERROR_NONE and response.error_msg
+        assert not response.trajectory.points
+        return
+    assert response.error_code == PlanPath.Response.ERROR_NONE and not response.error_msg
+    points = response.trajectory.points
+    if request.feasibility_only:
+        assert not points and response.global_paths
+        return
+    assert len(points) >= 1 and len(response.poses) == len(points)
+    numbers = np.array([list(p.positions) + list(p.velocities) + list(p.accelerations)
+                        for p in points])
+    assert numbers.shape[1] == 9 and np.all(np.isfinite(numbers))
+    assert all(math.isfinite(v) for p in response.poses for v in (p.x, p.y, p.alpha))
+    nanoseconds = [p.time_from_start.sec * 10**9 + p.time_from_start.nanosec for p in points]
+    assert nanoseconds[0] == 0 and all(b > a for a, b in zip(nanoseconds, nanoseconds[1:]))
+    start, goal = request.start, request.goal
+    np.testing.assert_allclose(points[0].positions, [start.rho1, start.rho2, start.rho3],
+                               rtol=0, atol=1e-9)
+    np.testing.assert_allclose(points[-1].positions, [goal.rho1, goal.rho2, goal.rho3],
+                               rtol=0, atol=1e-9)
+
+
+# --- one test per defect the issue reported -----------------------------------------------------
+
+@pytest.mark.parametrize("limit", [5e-324, 1e-300])
+def test_tiny_limits_are_an_invalid_input_and_the_node_still_serves(service, limit):
+    response = service.plan(Q1, Q2, max_velocity=limit, max_acceleration=limit)
+    assert response.error_code == PlanPath.Response.ERROR_INVALID_INPUT, response.error_msg
+    assert service.plan(Q1, Q2).success
+
+
+@pytest.mark.parametrize("limit", [1e-9, 1e-12, 1e100, 1e308])
+def test_limits_beyond_what_a_duration_holds_are_refused(service, limit):
+    response = service.plan(Q1, Q2, max_velocity=limit, max_acceleration=limit)
+    assert response.error_code == PlanPath.Response.ERROR_INVALID_INPUT, response.error_msg
+    assert "Duration" in response.error_msg or "ns" in response.error_msg \
+        or "floating point" in response.error_msg
+
+
+def test_a_huge_leg_is_out_of_the_grid(service):
+    response = service.plan((17.0, 1e308, 18.0, 0.0), Q2)
+    assert response.error_code == PlanPath.Response.ERROR_OUT_OF_GRID, response.error_msg
+
+
+def test_one_limit_alone_asks_for_both(service):
+    response = service.plan(Q1, Q2, max_velocity=1.0)
+    assert response.error_code == PlanPath.Response.ERROR_INVALID_INPUT
+    assert "give both" in response.error_msg
+
+
+def test_a_huge_alpha_is_not_reported_as_infinity(service):
+    response = service.plan((17.0, 12.0, 18.0, 1e308), Q2)
+    assert response.error_code == PlanPath.Response.ERROR_NO_ASSEMBLY_MODE
+    assert "inf" not in response.error_msg
+
+
+def test_no_limits_take_the_default_limits_as_the_interface_says(service):
+    response = service.plan(Q1, Q2)
+    assert response.success, response.error_msg
+    points = response.trajectory.points
+    assert _seconds(points[-1]) > 0
+    speed = max(abs(v) for p in points for v in p.velocities)
+    assert 0 < speed <= service.planner.get_parameter("default_max_velocity").value + 1e-9
+
+
+def test_the_response_names_the_roadmap_that_answered(service):
+    response = service.plan(MODE_A, MODE_B)
+    assert response.success, response.error_msg
+    assert response.roadmap_stamp == service.stamp.stamp and response.roadmap_rho1 == 17.0
+    failed = service.plan((13.0, 12.0, 18.0, 0.0), Q2)
+    assert failed.error_code == PlanPath.Response.ERROR_RHO1_MISMATCH
+    assert failed.roadmap_rho1 == 17.0
+
+
+# --- the fuzz test ------------------------------------------------------------------------------
+
+HOSTILE = [math.nan, math.inf, -math.inf, 1e308, -1e308, 1e300, 5e-324, -5e-324, 0.0, -0.0,
+           -1.0, 1e-12, 50.0, 50.0625, 50.07, 1e6]
+hostile = st.sampled_from(HOSTILE)
+leg = st.one_of(st.floats(0.0, 50.0), hostile)
+angle = st.one_of(st.floats(-math.pi, math.pi), hostile)
+PAPER_ENDS = [Q1, Q2, MODE_A, MODE_B]
+
+
+@st.composite
+def configurations(draw):
+    """Three in five a real assembly mode in the grid (or the paper's), else
+    a configuration at rho1 = 17 with hostile values among its numbers, or
+    anything at all."""
+    kind = draw(st.sampled_from(["valid", "valid", "valid", "rho1_17", "anything"]))
+    if kind == "valid":
+        rho = (17.0, draw(st.floats(0.0, 50.0)), draw(st.floats(0.0, 50.0)))
+        alphas = direct_kinematics(rho)[:, 2]
+        if alphas.size == 0:
+            return draw(st.sampled_from(PAPER_ENDS))
+        return (*rho, float(draw(st.sampled_from(alphas.tolist()))))
+    rho1 = 17.0 if kind == "rho1_17" else draw(leg)
+    return (rho1, draw(leg), draw(leg), draw(angle))
+
+
+@st.composite
+def limits(draw):
+    """Both 0 (the defaults), both sound, or anything."""
+    kind = draw(st.sampled_from(["defaults", "sound", "sound", "anything"]))
+    if kind == "defaults":
+        return 0.0, 0.0
+    value = st.floats(1e-2, 1e2) if kind == "sound" else st.one_of(st.floats(1e-3, 1e3), hostile)
+    return draw(value), draw(value)
+
+
+@st.composite
+def requests(draw):
+    max_velocity, max_acceleration = draw(limits())
+    return PlanPath.Request(
+        start=_configuration(draw(configurations())), goal=_configuration(draw(configurations())),
+        alpha_tolerance=draw(st.one_of(st.just(0.0), st.just(0.0), st.floats(1e-4, 0.2),
+                                       hostile)),
+        smooth=draw(st.booleans()), weighted=draw(st.booleans()),
+        feasibility_only=draw(st.booleans()),
+        max_velocity=max_velocity, max_acceleration=max_acceleration)
+
+
+outcomes = collections.Counter()
+
+
+@settings(max_examples=FUZZ_REQUESTS, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+@given(request=requests())
+def test_fuzzed_requests_get_sound_answers(service, request):
+    response = service.call(request)
+    outcomes[CODES[response.error_code]] += 1
+    check_sound(request, response, service.stamp)
+
+
+def test_the_node_answers_a_good_request_after_the_fuzzing(service):
+    print(f"\nplan_path fuzz outcomes over {sum(outcomes.values())} requests: "
+          f"{dict(sorted(outcomes.items()))}")
+    assert sum(outcomes.values()) >= FUZZ_REQUESTS
+    response = service.plan(Q1, Q2, smooth=True)
+    assert response.success, response.error_msg
+    check_sound(PlanPath.Request(start=_configuration(Q1), goal=_configuration(Q2)), response,
+                service.stamp)
