@@ -1,4 +1,5 @@
-"""The recorder as a real process: its bag is complete and readable after SIGINT."""
+"""The recorder as a real process: its bag is complete and readable after
+SIGINT, and after SIGKILL it is recovered with all but the last moment."""
 
 import os
 import pathlib
@@ -6,9 +7,11 @@ import signal
 import subprocess
 import time
 
+import pytest
 from rclpy.node import Node
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
+from rpr3_gwr_nodes.bag_recovery import BagRecoveryError, recover_bag
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 RECORDER = (pathlib.Path(__file__).resolve().parents[1] / "ros2_ws" / "install" / "rpr3_gwr_nodes"
@@ -48,3 +51,73 @@ def test_bag_is_readable_after_sigint(ros_context, tmp_path):
         messages = [typestore.deserialize_cdr(raw, c.msgtype) for c, _, raw in reader.messages()]
     assert [[list(p.positions) for p in m.points] for m in messages] == [
         [list(p.positions) for p in _trajectory(k).points] for k in range(3)]
+
+
+def _start_recorder(bag, *parameters):
+    arguments = [f"bag_path:={bag}", *parameters]
+    return subprocess.Popen([str(RECORDER), "--ros-args",
+                             *[x for a in arguments for x in ("-p", a)]], env=os.environ.copy())
+
+
+def _recorded(bag):
+    typestore = get_typestore(Stores.ROS2_JAZZY)
+    with Reader(bag) as reader:
+        return [typestore.deserialize_cdr(raw, c.msgtype) for c, _, raw in reader.messages()]
+
+
+# The recorder's default flush period is 0.5 s; a second covers it and the
+# time a message takes from the publisher to the writer thread.
+MOST_LOST = 1.0
+
+
+@pytest.mark.parametrize("storage", ["sqlite3", "mcap"])
+def test_a_killed_recorder_loses_at_most_the_last_second(ros_context, tmp_path, storage):
+    bag = tmp_path / "bag"
+    process = _start_recorder(bag, f"storage:={storage}")
+    node = Node("recorder_feeder", context=ros_context)
+    sent = []
+    try:
+        publisher = node.create_publisher(JointTrajectory, "planned_trajectory", 100)
+        deadline = time.monotonic() + 30.0
+        while publisher.get_subscription_count() == 0 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert publisher.get_subscription_count() == 1, "the recorder did not subscribe"
+        start = time.monotonic()
+        while time.monotonic() - start < 3.0:
+            publisher.publish(_trajectory(len(sent)))
+            sent.append(time.monotonic())
+            time.sleep(0.02)
+        process.send_signal(signal.SIGKILL)
+        killed = time.monotonic()
+        process.wait(timeout=20.0)
+    finally:
+        if process.poll() is None:
+            process.kill()
+        node.destroy_node()
+    assert not (bag / "metadata.yaml").exists()
+    assert recover_bag(bag) > 0
+    first_points = [m.points[0].positions[1] - 10.0 for m in _recorded(bag)]
+    kept = sorted(int(round(k)) for k in first_points)
+    assert kept == list(range(len(kept))), "the recovered bag has gaps or duplicates"
+    old_enough = sum(1 for t in sent if killed - t > MOST_LOST)
+    lost = len(sent) - len(kept)
+    print(f"\n{storage}: {len(sent)} published over 3 s, {len(kept)} recovered, {lost} lost "
+          f"(the last {killed - sent[len(kept)] if lost else 0.0:.2f} s before SIGKILL)")
+    assert len(kept) >= old_enough
+
+
+def test_recovering_a_complete_bag_is_refused(ros_context, tmp_path):
+    bag = tmp_path / "bag"
+    process = _start_recorder(bag)
+    try:
+        deadline = time.monotonic() + 30.0
+        while not bag.exists() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        time.sleep(0.5)
+        process.send_signal(signal.SIGINT)
+        assert process.wait(timeout=20.0) == 0
+    finally:
+        if process.poll() is None:
+            process.kill()
+    with pytest.raises(BagRecoveryError):
+        recover_bag(bag)

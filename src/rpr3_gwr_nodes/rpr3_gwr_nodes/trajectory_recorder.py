@@ -3,26 +3,35 @@ joint states) to a rosbag2 bag.
 
 Messages are taken serialized from DDS (``raw=True``) and written unchanged,
 by a thread of its own (the storage may only be used by the thread that
-opened it, whatever executor spins the node), with the ``rosbags`` library, so ``ros2 bag info`` and ``ros2 bag play`` of a
-full Jazzy install read the bag (format version 9, sqlite3 or MCAP storage,
-with metadata.yaml).  The bag is closed, and its metadata written, when the
-node is destroyed: on SIGINT too, since ``main`` destroys the node in
-``finally``.
+opened it, whatever executor spins the node), with the ``rosbags`` library,
+so ``ros2 bag info`` and ``ros2 bag play`` of a full Jazzy install read the
+bag (format version 9, sqlite3 or MCAP storage, with metadata.yaml).  The bag
+is closed, and its metadata written, when the node is destroyed: on SIGINT
+too, since ``main`` destroys the node in ``finally``.
+
+Every ``flush_period`` seconds what was written reaches the file (sqlite3:
+the transaction is committed; MCAP: the chunk is closed and the file
+flushed), so a recorder killed outright (SIGKILL, power loss) loses at most
+the last period.  Such a bag has no metadata.yaml: ``rpr3_gwr_recover_bag``
+(:mod:`~rpr3_gwr_nodes.bag_recovery`) makes it whole again.
 
 Parameters: ``bag_path`` (default ``rpr3_gwr_bags/<date>_<time>``),
-``storage`` (``sqlite3`` or ``mcap``), ``record_joint_states`` (bool).
+``storage`` (``sqlite3`` or ``mcap``), ``record_joint_states`` (bool),
+``flush_period`` [s].
 """
 
 import datetime
 import pathlib
 import queue
 import threading
+import time
 
-from rcl_interfaces.msg import ParameterDescriptor
+from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.rosbag2.storage_sqlite3 import Sqlite3Writer
 from rosbags.typesys import Stores, get_typestore
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
@@ -46,12 +55,18 @@ class TrajectoryRecorder(Node):
             description="rosbag2 storage: sqlite3 or mcap", read_only=True))
         self.declare_parameter("record_joint_states", False, ParameterDescriptor(
             description="Also record the driver's joint_states", read_only=True))
+        self.declare_parameter("flush_period", 0.5, ParameterDescriptor(
+            description="Most time between a message's arrival and its reaching the bag's "
+                        "file; a killed recorder loses at most this much [s]",
+            read_only=True,
+            floating_point_range=[FloatingPointRange(from_value=0.01, to_value=60.0)]))
         storage = self.get_parameter("storage").value
         if storage not in _STORAGE:
             raise ValueError(f"storage must be one of {sorted(_STORAGE)}, got {storage!r}")
         self.bag_path = pathlib.Path(self.get_parameter("bag_path").value).resolve()
         self.bag_path.parent.mkdir(parents=True, exist_ok=True)
-        topics = {"planned_trajectory": (JointTrajectory, "trajectory_msgs/msg/JointTrajectory", 10)}
+        topics = {"planned_trajectory": (JointTrajectory, "trajectory_msgs/msg/JointTrajectory",
+                                         10)}
         if self.get_parameter("record_joint_states").value:
             topics["joint_states"] = (JointState, "sensor_msgs/msg/JointState",
                                       qos_profile_sensor_data)
@@ -60,26 +75,43 @@ class TrajectoryRecorder(Node):
         opened = threading.Event()
         self._thread = threading.Thread(
             target=self._write_loop, daemon=True,
-            args=(_STORAGE[storage], {t: (self.resolve_topic_name(t), v[1]) for t, v in topics.items()},
-                  opened))
+            args=(_STORAGE[storage],
+                  {t: (self.resolve_topic_name(t), v[1]) for t, v in topics.items()},
+                  self.get_parameter("flush_period").value, opened))
         self._thread.start()
         opened.wait()
         for topic, (msg_type, _, qos) in topics.items():
             self.create_subscription(msg_type, topic, self._enqueue(topic), qos, raw=True)
         self.get_logger().info(f"recording {sorted(topics)} to {self.bag_path}")
 
-    def _write_loop(self, storage, topics, opened):
+    def _write_loop(self, storage, topics, flush_period, opened):
         writer = Writer(self.bag_path, version=9, storage_plugin=storage)
         writer.open()
         typestore = get_typestore(Stores.ROS2_JAZZY)
         connections = {topic: writer.add_connection(name, type_name, typestore=typestore)
                        for topic, (name, type_name) in topics.items()}
+        _make_durable(writer)
         opened.set()
+        due = None  # when what was written since the last flush must be in the file
         try:
-            while (item := self._queue.get()) is not None:
+            while True:
+                try:
+                    item = self._queue.get(
+                        timeout=None if due is None else max(0.0, due - time.monotonic()))
+                except queue.Empty:
+                    _make_durable(writer)
+                    due = None
+                    continue
+                if item is None:
+                    break
                 topic, stamp, raw = item
                 writer.write(connections[topic], stamp, raw)
                 self.counts[topic] += 1
+                if due is None:
+                    due = time.monotonic() + flush_period
+                elif time.monotonic() >= due:
+                    _make_durable(writer)
+                    due = None
         finally:
             writer.close()
 
@@ -100,6 +132,24 @@ class TrajectoryRecorder(Node):
     def destroy_node(self):
         self.close_bag()
         return super().destroy_node()
+
+
+def _make_durable(writer):
+    """Put what ``writer`` holds in memory into its file.
+
+    rosbags (0.11, pinned) keeps one sqlite3 transaction open until close and
+    an MCAP chunk in memory until it reaches 1 MiB; committing, and closing
+    the chunk, are what its own close does first.  The recorder's SIGKILL
+    test guards this use of its storage objects.
+    """
+    storage = writer.storage
+    if isinstance(storage, Sqlite3Writer):
+        storage.conn.commit()
+        return
+    # A chunk without messages would be indexed with an empty time range.
+    if storage.chunk.msgs:
+        storage.close_chunk()
+    storage.bio.flush()
 
 
 def main(args=None):
