@@ -212,20 +212,6 @@ def test_start_equal_to_goal_is_a_one_point_trajectory(suite):
     assert response.success and len(response.trajectory.points) == 1
 
 
-def test_driver_rejects_bad_trajectories_and_keeps_serving(suite):
-    assert suite.reset(Q1).success
-    empty = JointTrajectory(joint_names=["rho1", "rho2", "rho3"])
-    assert suite.execute(empty).error_code == ExecuteTrajectory.Result.INVALID_TRAJECTORY
-    wrong_names = JointTrajectory(joint_names=["a", "b", "c"],
-                                  points=[JointTrajectoryPoint(positions=list(Q1[:3]))])
-    assert suite.execute(wrong_names).error_code == ExecuteTrajectory.Result.INVALID_TRAJECTORY
-    elsewhere = JointTrajectory(joint_names=["rho1", "rho2", "rho3"],
-                                points=[JointTrajectoryPoint(positions=[17.0, 30.0, 30.0])])
-    assert suite.execute(elsewhere).error_code == ExecuteTrajectory.Result.START_MISMATCH
-    response = suite.plan(Q1, Q1)
-    assert suite.execute(response.trajectory).error_code == ExecuteTrajectory.Result.SUCCESS
-
-
 def test_driver_aborts_a_trajectory_through_a_singularity_and_holds(suite):
     assert suite.reset(Q1).success
     # Straight legs from q1 towards the far corner cross the singular locus.

@@ -7,28 +7,34 @@ late joiners get the latest):
   patches and continuation links;
 * ``roadmap`` (rpr3_gwr_msgs/WorkspaceRoadmap): patches and gates.
 
-Parameters (geometry read-only; rho1 and the grid may change at run time,
-which rebuilds and republishes; invalid values are refused with a reason):
-``a1``, ``a2``, ``a3`` [length unit], ``d1``, ``d3`` [length unit], ``beta``
-[rad], ``rho1``, ``rho2_range``, ``rho3_range``, ``step`` [length unit].
+Parameters: the geometry (``a1``, ``a2``, ``a3``, ``d1``, ``d3`` [length
+unit], ``beta`` [rad], read-only, :mod:`.geometry_parameters`) and the grid
+(``rho1``, ``rho2_range``, ``rho3_range``, ``step`` [length unit]), which
+may change at run time: a change is checked at once (at least two cells along
+each axis, at most ``_MAX_CELLS``, some cell with a direct-kinematic solution)
+and refused with a reason, else the roadmap is rebuilt and republished.  A
+rebuilt roadmap without a patch is not published: the parameters go back to
+the last published grid, whose roadmap stays latched.
 """
 
-import threading
 import time
 
+import numpy as np
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rpr3_gwr_core.exceptions import GWRError
 from rpr3_gwr_core.field import Grid
-from rpr3_gwr_core.geometry import PAPER_GEOMETRY, Geometry
+from rpr3_gwr_core.kinematics import direct_kinematics_batch
 from rpr3_gwr_core.roadmap import build_roadmap
 from rpr3_gwr_msgs.msg import NSolutionField, WorkspaceRoadmap
 from std_msgs.msg import Header
 
 from .conversions import roadmap_to_msgs
+from .geometry_parameters import declare_geometry
 from .spin import run
 
 __all__ = ["RoadmapBuilder", "LATCHED_QOS", "main"]
@@ -39,10 +45,14 @@ LATCHED_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
 _GRID_PARAMETERS = ("rho1", "rho2_range", "rho3_range", "step")
 # Largest grid the builder accepts: about 4 million cells (2001 x 2001).
 _MAX_CELLS = 4_000_000
+# Cells sampled to tell at once whether a grid can give a roadmap at all,
+# and the fewest solvable cells that can (build_roadmap's min_region_cells).
+_PROBE_CELLS = 4096
+_MIN_REGION_CELLS = 8
 
 
-def _length(description, low=0.0, high=1000.0, read_only=False):
-    return ParameterDescriptor(description=description, read_only=read_only,
+def _length(description, low=0.0, high=1000.0):
+    return ParameterDescriptor(description=description,
                                floating_point_range=[FloatingPointRange(from_value=low,
                                                                         to_value=high)])
 
@@ -52,17 +62,7 @@ class RoadmapBuilder(Node):
 
     def __init__(self, **kwargs):
         super().__init__("roadmap_builder", **kwargs)
-        g = PAPER_GEOMETRY
-        for name, value in (("a1", g.a1), ("a2", g.a2), ("a3", g.a3)):
-            self.declare_parameter(name, list(value), ParameterDescriptor(
-                description=f"Base joint {name.upper()} (x, y) [length unit]", read_only=True))
-        self.declare_parameter("d1", g.d1, _length("Platform side B1B2 [length unit]",
-                                                   read_only=True))
-        self.declare_parameter("d3", g.d3, _length("Platform side B1B3 [length unit]",
-                                                   read_only=True))
-        self.declare_parameter("beta", g.beta, ParameterDescriptor(
-            description="Platform angle at B1 [rad]", read_only=True,
-            floating_point_range=[FloatingPointRange(from_value=-3.1416, to_value=3.1416)]))
+        self.geometry = declare_geometry(self)
         self.declare_parameter("rho1", 17.0, _length("Fixed first leg [length unit]",
                                                      low=0.001))
         self.declare_parameter("rho2_range", [0.0, 50.0], ParameterDescriptor(
@@ -71,20 +71,16 @@ class RoadmapBuilder(Node):
             description="Grid range of rho3, [min, max] [length unit]"))
         self.declare_parameter("step", 0.125, _length("Grid step [length unit]", low=0.001,
                                                       high=100.0))
-        self.geometry = Geometry(
-            a1=tuple(self.get_parameter("a1").value), a2=tuple(self.get_parameter("a2").value),
-            a3=tuple(self.get_parameter("a3").value), d1=self.get_parameter("d1").value,
-            d3=self.get_parameter("d3").value, beta=self.get_parameter("beta").value)
         self.field_pub = self.create_publisher(NSolutionField, "field", LATCHED_QOS)
         self.roadmap_pub = self.create_publisher(WorkspaceRoadmap, "roadmap", LATCHED_QOS)
-        self._pending = threading.Event()
-        self._pending.set()
         self.roadmap = None
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._parameters_set)
-        # Builds run in a timer of their own so parameter services keep answering.
-        self._build_timer = self.create_timer(0.05, self._build_if_pending,
-                                              callback_group=MutuallyExclusiveCallbackGroup())
+        # Builds run in a callback of their own, woken by the parameter
+        # callback, so parameter services keep answering during a build.
+        self._rebuild = self.create_guard_condition(
+            self._build, callback_group=MutuallyExclusiveCallbackGroup())
+        self._rebuild.trigger()
 
     def _grid(self, overrides=None):
         values = {name: self.get_parameter(name).value for name in _GRID_PARAMETERS}
@@ -100,19 +96,34 @@ class RoadmapBuilder(Node):
             grid = self._grid(overrides)
         except (GWRError, TypeError, ValueError) as exc:
             return SetParametersResult(successful=False, reason=f"invalid grid: {exc}")
+        if min(grid.shape) < 2:
+            return SetParametersResult(successful=False, reason=(
+                f"a grid of {grid.shape[0]} x {grid.shape[1]} cells has no faces along one "
+                "axis: give each axis at least two cells"))
         if grid.size > _MAX_CELLS:
             return SetParametersResult(successful=False, reason=(
                 f"grid of {grid.size} cells exceeds the limit of {_MAX_CELLS}"))
+        solvable = self._cells_with_solutions(grid)
+        if solvable < _MIN_REGION_CELLS:
+            return SetParametersResult(successful=False, reason=(
+                f"about {solvable:.0f} cells of the grid have a direct-kinematic solution at "
+                f"rho1 = {grid.rho1:g}, fewer than one region needs ({_MIN_REGION_CELLS}): "
+                "its roadmap would be empty"))
         return SetParametersResult(successful=True)
 
-    def _parameters_set(self, parameters):
-        if any(p.name in _GRID_PARAMETERS for p in parameters):
-            self._pending.set()
+    def _cells_with_solutions(self, grid):
+        """Estimate of the cells of ``grid`` with a solution, from ``_PROBE_CELLS``
+        cells spread over it."""
+        probe = np.unique(np.linspace(0, grid.size - 1, _PROBE_CELLS).astype(int))
+        count, _ = direct_kinematics_batch(grid.rho()[probe], self.geometry)
+        return np.count_nonzero(count) * grid.size / probe.size
 
-    def _build_if_pending(self):
-        if not self._pending.is_set():
-            return
-        self._pending.clear()
+    def _parameters_set(self, parameters):
+        published = None if self.roadmap is None else self.roadmap.grid
+        if any(p.name in _GRID_PARAMETERS for p in parameters) and self._grid() != published:
+            self._rebuild.trigger()
+
+    def _build(self):
         grid = self._grid()
         n2, n3 = grid.shape
         self.get_logger().info(f"building the roadmap: rho1 = {grid.rho1:g}, {n2} x {n3} cells")
@@ -121,15 +132,39 @@ class RoadmapBuilder(Node):
         def progress(stage, fraction):
             self.get_logger().info(f"  {fraction:4.0%} {stage}")
 
-        self.roadmap = build_roadmap(self.geometry, grid, progress=progress)
-        seg = self.roadmap.segmentation
+        try:
+            roadmap = build_roadmap(self.geometry, grid, progress=progress)
+        except Exception as exc:  # a failed build must not take the builder down
+            self.get_logger().error(f"building the roadmap failed: {exc!r}")
+            self._keep_last_good(grid)
+            return
+        seg = roadmap.segmentation
+        if not seg.patches:
+            self.get_logger().error(f"the roadmap at rho1 = {grid.rho1:g} has no patch")
+            self._keep_last_good(grid)
+            return
+        self.roadmap = roadmap
         header = Header(stamp=self.get_clock().now().to_msg(), frame_id="rpr3_base")
-        field_msg, roadmap_msg = roadmap_to_msgs(self.roadmap, header)
+        field_msg, roadmap_msg = roadmap_to_msgs(roadmap, header)
         self.field_pub.publish(field_msg)
         self.roadmap_pub.publish(roadmap_msg)
         self.get_logger().info(
             f"published the roadmap: {seg.n_regions} regions, {len(seg.patches)} patches, "
             f"{len(seg.gates)} gates, built in {time.perf_counter() - start:.2f} s")
+
+    def _keep_last_good(self, grid):
+        """Leave the published roadmap latched and the parameters naming its grid."""
+        if self.roadmap is None:
+            self.get_logger().error("no roadmap is published")
+            return
+        good = self.roadmap.grid
+        self.get_logger().error(f"the roadmap for rho1 = {good.rho1:g} stays published; the "
+                                "grid parameters go back to its grid")
+        self.set_parameters_atomically([
+            Parameter("rho1", value=good.rho1),
+            Parameter("rho2_range", value=list(good.rho2_range)),
+            Parameter("rho3_range", value=list(good.rho3_range)),
+            Parameter("step", value=good.step)])
 
 
 def main(args=None):

@@ -8,15 +8,25 @@ so it stays in its assembly mode unless a singularity is crossed.
   active legs rho1..rho3 (positions and velocities) and the passive angles
   theta1..theta3;
 * ``platform_pose`` (rpr3_gwr_msgs/PlatformPose, same rate);
-* ``/diagnostics`` (diagnostic_msgs/DiagnosticArray, 1 Hz): the normalised
-  det(Jx) margin, WARN below ``warn_margin``;
+* ``/diagnostics`` (diagnostic_msgs/DiagnosticArray, 1 Hz and at once on an
+  abort): the normalised det(Jx) margin m with level OK when
+  ``|m| >= warn_margin``, WARN when ``abort_margin <= |m| < warn_margin``,
+  ERROR when ``|m| < abort_margin`` or while the driver holds after an abort
+  (until a reset or a goal that succeeds);
 * ``execute_trajectory`` (rpr3_gwr_msgs/ExecuteTrajectory action): replays a
-  JointTrajectory in real time (scaled by ``time_scale``); it must start at
-  the current legs.  Before each control step the driver checks where the
-  platform would go: if the margin would fall below ``abort_margin``, det(Jx)
-  would change sign, or the platform could not follow, it aborts the goal and
-  holds still at the last safe legs;
+  JointTrajectory in real time (scaled by ``time_scale``).  As ros2_controllers'
+  joint_trajectory_controller does, a goal is validated when it arrives and
+  rejected there, with the reason in the log: no points, wrong joint names,
+  legs not finite or outside ``leg_limits``, time stamps negative or not
+  strictly increasing, a joint faster than ``max_velocity``, a first point
+  farther than ``start_tolerance`` from the current legs, or another goal
+  executing.  Before each control step the driver checks where the platform
+  would go: if the margin would fall below ``abort_margin``, det(Jx) would
+  change sign, or the platform could not follow, it aborts the goal, says
+  why and with which margin, and holds still at the last safe legs;
 * ``reset`` (rpr3_gwr_msgs/ResetDriver): puts the platform at a configuration.
+
+The geometry parameters are the builder's (:mod:`.geometry_parameters`).
 """
 
 import math
@@ -31,8 +41,6 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallb
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
-from rpr3_gwr_core.exceptions import GWRError
-from rpr3_gwr_core.geometry import PAPER_GEOMETRY
 from rpr3_gwr_core.kinematics import direct_kinematics, passive_angles, singularity_margin
 from rpr3_gwr_core.mechanism import Mechanism
 from rpr3_gwr_core.validation import DEFAULT_MAX_STEP
@@ -42,12 +50,14 @@ from rpr3_gwr_msgs.srv import ResetDriver
 from sensor_msgs.msg import JointState
 
 from .conversions import duration_msg
-from .spin import run
+from .geometry_parameters import declare_geometry
 from .planner import JOINT_NAMES
+from .spin import run
 
 __all__ = ["Rpr3Driver", "main"]
 
 _Result = ExecuteTrajectory.Result
+_Reset = ResetDriver.Response
 
 
 def _seconds(duration):
@@ -62,39 +72,59 @@ def _slope(times, positions, t):
     return (positions[k + 1] - positions[k]) / (times[k + 1] - times[k])
 
 
+def _pose_msg(pose):
+    return PlatformPose(x=float(pose[0]), y=float(pose[1]), alpha=float(pose[2]))
+
+
+class _Refused(Exception):
+    """A request the driver answers with an error code and a reason."""
+
+    def __init__(self, code, reason):
+        super().__init__(reason)
+        self.code = code
+
+
 class Rpr3Driver(Node):
     """The simulated manipulator."""
 
     def __init__(self, **kwargs):
         super().__init__("rpr3_driver", **kwargs)
 
-        def positive(description, value, high=1e6):
-            self.declare_parameter(value[0], value[1], ParameterDescriptor(
+        def positive(name, value, description, high=1e6):
+            self.declare_parameter(name, value, ParameterDescriptor(
                 description=description,
                 floating_point_range=[FloatingPointRange(from_value=1e-9, to_value=high)]))
 
-        positive("Joint state publishing rate [Hz]", ("rate", 100.0), 1000.0)
+        positive("rate", 100.0, "Joint state publishing and control rate [Hz]", 1000.0)
         # Half the planner's validation margin (1e-3): validated plans pass
         # even where the driver's steps sample the margin differently.
-        positive("Smallest normalised |det Jx| allowed; below it a goal aborts",
-                 ("abort_margin", 5e-4), 1.0)
-        positive("Normalised |det Jx| below which diagnostics warn", ("warn_margin", 0.02), 1.0)
-        positive("Largest distance of a trajectory's first point from the current legs "
-                 "[length unit]", ("start_tolerance", 1e-3))
-        positive("Playback speed factor: 2 replays twice as fast", ("time_scale", 1.0), 1000.0)
+        positive("abort_margin", 5e-4, "Smallest normalised |det Jx| allowed: below it a goal "
+                 "aborts, and diagnostics say ERROR", 1.0)
+        positive("warn_margin", 0.02, "Normalised |det Jx| below which diagnostics say WARN", 1.0)
+        positive("start_tolerance", 1e-3, "Largest distance of a trajectory's first point from "
+                 "the current legs [length unit]")
+        positive("time_scale", 1.0, "Playback speed factor: 2 replays twice as fast", 1000.0)
+        positive("max_velocity", 50.0, "Fastest joint speed a trajectory may ask for, as it is "
+                 "timed [length unit/s]")
+        self.declare_parameter("leg_limits", [0.0, 50.0], ParameterDescriptor(
+            description="Shortest and longest leg [length unit]", read_only=True))
         self.declare_parameter("initial_configuration", [17.0, 12.0, 18.0, math.radians(122.82)],
                                ParameterDescriptor(
                                    description="Initial (rho1, rho2, rho3 [length unit], "
                                                "alpha [rad])", read_only=True))
-        self.geometry = PAPER_GEOMETRY
+        self.geometry = declare_geometry(self)
         self.mechanism = Mechanism(self.geometry)
+        self.leg_limits = tuple(float(v) for v in self.get_parameter("leg_limits").value)
         self._lock = threading.Lock()
-        self._busy = threading.Lock()
-        rho1, rho2, rho3, alpha = self.get_parameter("initial_configuration").value
-        self.rho, self.pose, self.margin = self._assembly((rho1, rho2, rho3), alpha)
+        self._active = False  # a goal is accepted or executing (under _lock)
+        self._holding = ""  # why the driver holds after an abort, "" when it does not
+        self._stopping = threading.Event()
+        self.rho, self.pose, self.margin = self._assembly(
+            self.get_parameter("initial_configuration").value)
         self.velocity = np.zeros(3)
         self.joint_pub = self.create_publisher(JointState, "joint_states", qos_profile_sensor_data)
-        self.pose_pub = self.create_publisher(PlatformPose, "platform_pose", qos_profile_sensor_data)
+        self.pose_pub = self.create_publisher(PlatformPose, "platform_pose",
+                                              qos_profile_sensor_data)
         self.diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         timers = MutuallyExclusiveCallbackGroup()
         self.create_timer(1.0 / self.get_parameter("rate").value, self._publish_state,
@@ -103,17 +133,43 @@ class Rpr3Driver(Node):
         self.create_service(ResetDriver, "reset", self._on_reset)
         self._action = ActionServer(
             self, ExecuteTrajectory, "execute_trajectory", self._execute,
-            goal_callback=lambda _: GoalResponse.ACCEPT,
-            cancel_callback=lambda _: CancelResponse.ACCEPT,
+            goal_callback=self._on_goal, cancel_callback=lambda _: CancelResponse.ACCEPT,
             callback_group=ReentrantCallbackGroup())
 
-    def _assembly(self, rho, alpha):
-        """Legs, pose and margin of the assembly mode nearest ``alpha``."""
-        poses = direct_kinematics(np.asarray(rho, dtype=float), self.geometry)
+    # --- state -------------------------------------------------------------------------------
+
+    def _assembly(self, configuration):
+        """Legs, pose and margin of the assembly mode nearest alpha in
+        ``(rho1, rho2, rho3, alpha)``.
+
+        Raises
+        ------
+        _Refused
+            With the reset's error code when the configuration is not valid.
+        """
+        values = tuple(float(v) for v in configuration)
+        if len(values) != 4 or not all(math.isfinite(v) for v in values) or min(values[:3]) < 0:
+            raise _Refused(_Reset.ERROR_INVALID_INPUT, "a configuration is (rho1, rho2, rho3, "
+                           f"alpha), finite, with non-negative legs: got {values}")
+        low, high = self.leg_limits
+        if not all(low <= v <= high for v in values[:3]):
+            raise _Refused(_Reset.ERROR_OUT_OF_RANGE,
+                           f"legs {values[:3]} outside the leg limits [{low:g}, {high:g}]")
+        rho, alpha = np.array(values[:3]), values[3]
+        poses = direct_kinematics(rho, self.geometry)
         if len(poses) == 0:
-            raise GWRError(f"no real solution at rho = {tuple(rho)}")
-        k = int(np.argmin(np.abs(np.angle(np.exp(1j * (poses[:, 2] - alpha))))))
-        return np.asarray(rho, dtype=float), poses[k], float(singularity_margin(poses[k]))
+            raise _Refused(_Reset.ERROR_NO_SOLUTION, f"no real solution at rho = {values[:3]}")
+        off = np.abs(np.remainder(poses[:, 2] - alpha + np.pi, 2 * np.pi) - np.pi)
+        k = int(np.argmin(off))
+        if off[k] > math.radians(1.0):
+            raise _Refused(_Reset.ERROR_NO_ASSEMBLY_MODE,
+                           f"no assembly mode within 1 deg of alpha = "
+                           f"{math.degrees(math.remainder(alpha, 2 * math.pi)):.2f} deg")
+        margin = float(singularity_margin(poses[k], self.geometry))
+        if abs(margin) < self.get_parameter("abort_margin").value:
+            raise _Refused(_Reset.ERROR_SINGULAR, f"configuration is singular (margin "
+                           f"{abs(margin):.2e})")
+        return rho, poses[k], margin
 
     def state(self):
         """``(rho, pose, margin)`` under the lock."""
@@ -121,110 +177,139 @@ class Rpr3Driver(Node):
             return self.rho.copy(), self.pose.copy(), self.margin
 
     def _publish_state(self):
-        rho, pose, _ = self.state()
         with self._lock:
-            velocity = self.velocity.copy()
+            rho, pose, velocity = self.rho.copy(), self.pose.copy(), self.velocity.copy()
         msg = JointState()
         msg.header.stamp = self.get_clock().now().to_msg()
         msg.name = list(JOINT_NAMES) + ["theta1", "theta2", "theta3"]
-        msg.position = [float(v) for v in rho] + [float(v) for v in passive_angles(pose)]
+        msg.position = [float(v) for v in rho] + [
+            float(v) for v in passive_angles(pose, self.geometry)]
         msg.velocity = [float(v) for v in velocity] + [math.nan] * 3
         self.joint_pub.publish(msg)
-        self.pose_pub.publish(PlatformPose(x=float(pose[0]), y=float(pose[1]), alpha=float(pose[2])))
+        self.pose_pub.publish(_pose_msg(pose))
 
-    def _publish_diagnostics(self):
-        _, pose, margin = self.state()
-        warn = self.get_parameter("warn_margin").value
-        status = DiagnosticStatus(
-            name="rpr3_driver: singularity", hardware_id="rpr3_sim",
-            level=DiagnosticStatus.OK if abs(margin) >= warn else DiagnosticStatus.WARN,
-            message="regular" if abs(margin) >= warn else "near a parallel singularity",
-            values=[KeyValue(key="singularity_margin", value=f"{abs(margin):.6f}"),
+    def diagnostic_status(self):
+        """The singularity status (the module doc gives its levels)."""
+        with self._lock:
+            pose, margin, holding = self.pose.copy(), self.margin, self._holding
+        size = abs(margin)
+        if holding or size < self.get_parameter("abort_margin").value:
+            level, message = DiagnosticStatus.ERROR, holding or "at a parallel singularity"
+        elif size < self.get_parameter("warn_margin").value:
+            level, message = DiagnosticStatus.WARN, "near a parallel singularity"
+        else:
+            level, message = DiagnosticStatus.OK, "regular"
+        return DiagnosticStatus(
+            name="rpr3_driver: singularity", hardware_id="rpr3_sim", level=level, message=message,
+            values=[KeyValue(key="singularity_margin", value=f"{size:.6f}"),
                     KeyValue(key="aspect", value=str(int(np.sign(margin)))),
                     KeyValue(key="alpha", value=f"{pose[2]:.6f}")])
-        array = DiagnosticArray(status=[status])
+
+    def _publish_diagnostics(self):
+        array = DiagnosticArray(status=[self.diagnostic_status()])
         array.header.stamp = self.get_clock().now().to_msg()
         self.diag_pub.publish(array)
 
+    # --- reset -------------------------------------------------------------------------------
+
     def _on_reset(self, request, response):
-        c = request.configuration
-        values = (c.rho1, c.rho2, c.rho3, c.alpha)
-        if not all(math.isfinite(v) for v in values) or min(values[:3]) < 0:
-            response.error_code = ResetDriver.Response.ERROR_INVALID_INPUT
-            response.error_msg = f"configuration must be finite with non-negative legs: {values}"
-            return response
-        if not self._busy.acquire(blocking=False):
-            response.error_code = ResetDriver.Response.ERROR_BUSY
-            response.error_msg = "a trajectory is executing"
-            return response
         try:
-            try:
-                rho, pose, margin = self._assembly(values[:3], values[3])
-            except GWRError as exc:
-                response.error_code = ResetDriver.Response.ERROR_NO_SOLUTION
-                response.error_msg = str(exc)
-                return response
-            if abs(math.remainder(pose[2] - values[3], 2 * math.pi)) > math.radians(1.0):
-                response.error_code = ResetDriver.Response.ERROR_NO_ASSEMBLY_MODE
-                response.error_msg = f"no assembly mode within 1 deg of alpha = {values[3]:.4f} rad"
-                return response
-            if abs(margin) < self.get_parameter("abort_margin").value:
-                response.error_code = ResetDriver.Response.ERROR_SINGULAR
-                response.error_msg = f"configuration is singular (margin {abs(margin):.2e})"
-                return response
+            c = request.configuration
+            rho, pose, margin = self._assembly((c.rho1, c.rho2, c.rho3, c.alpha))
             with self._lock:
+                if self._active:
+                    raise _Refused(_Reset.ERROR_BUSY, "a trajectory is executing")
                 self.rho, self.pose, self.margin = rho, pose, margin
                 self.velocity = np.zeros(3)
-            response.success = True
-            response.pose = PlatformPose(x=float(pose[0]), y=float(pose[1]), alpha=float(pose[2]))
+                self._holding = ""
+        except _Refused as exc:
+            response.error_code, response.error_msg = exc.code, str(exc)
             return response
-        finally:
-            self._busy.release()
+        except Exception as exc:  # a bug must not take the driver down
+            self.get_logger().error(f"internal error on a reset: {exc!r}")
+            response.error_code = _Reset.ERROR_INVALID_INPUT
+            response.error_msg = f"internal error: {exc!r}"
+            return response
+        response.success = True
+        response.error_code = _Reset.ERROR_NONE
+        response.pose = _pose_msg(pose)
+        return response
 
-    def _check(self, trajectory):
-        """Why a trajectory cannot be executed, as (code, reason), or None."""
+    # --- trajectories ------------------------------------------------------------------------
+
+    def _on_goal(self, goal_request):
+        """Accept a valid goal and take the driver for it; reject anything else."""
+        try:
+            problem = self._problem(goal_request.trajectory)
+        except Exception as exc:  # a bug must not take the driver down
+            problem = f"internal error: {exc!r}"
+        if problem is None:
+            with self._lock:
+                if self._active:
+                    problem = "busy: another trajectory is executing"
+                else:
+                    self._active = True
+        if problem is not None:
+            self.get_logger().warning(f"rejecting a trajectory: {problem}")
+            return GoalResponse.REJECT
+        return GoalResponse.ACCEPT
+
+    def _problem(self, trajectory):
+        """Why a trajectory cannot be executed from here, or None."""
         if list(trajectory.joint_names) != JOINT_NAMES:
-            return _Result.INVALID_TRAJECTORY, f"joint names must be {JOINT_NAMES}"
+            return f"joint names must be {JOINT_NAMES}, got {list(trajectory.joint_names)}"
         points = trajectory.points
         if not points:
-            return _Result.INVALID_TRAJECTORY, "the trajectory has no points"
+            return "the trajectory has no points"
         if any(len(p.positions) != 3 for p in points):
-            return _Result.INVALID_TRAJECTORY, "every point needs 3 positions"
+            return "every point needs 3 positions"
         positions = np.array([list(p.positions) for p in points])
-        if not np.all(np.isfinite(positions)) or np.any(positions < 0):
-            return _Result.INVALID_TRAJECTORY, "positions must be finite and non-negative"
+        if not np.all(np.isfinite(positions)):
+            return "positions must be finite"
+        low, high = self.leg_limits
+        if np.any(positions < low) or np.any(positions > high):
+            return f"legs must lie within the leg limits [{low:g}, {high:g}]"
         times = np.array([_seconds(p.time_from_start) for p in points])
-        if len(points) > 1 and not np.all(np.diff(times) > 0):
-            return _Result.INVALID_TRAJECTORY, "time_from_start must increase strictly"
+        if np.any(times < 0):
+            return "time_from_start must not be negative"
+        if np.any(np.diff(times) <= 0):
+            return "time_from_start must increase strictly"
+        if len(points) > 1:
+            speed = np.max(np.abs(np.diff(positions, axis=0)) / np.diff(times)[:, None])
+            limit = self.get_parameter("max_velocity").value
+            if speed > limit:
+                return f"a joint would move at {speed:.3g} length unit/s, above max_velocity " \
+                       f"{limit:g}"
+        return self._start_gap(positions[0])
+
+    def _start_gap(self, first):
         rho, _, _ = self.state()
-        gap = float(np.max(np.abs(positions[0] - rho)))
+        gap = float(np.max(np.abs(first - rho)))
         if gap > self.get_parameter("start_tolerance").value:
-            return _Result.START_MISMATCH, (
-                f"the trajectory starts {gap:.4g} away from the current legs {rho.tolist()}")
+            return f"the trajectory starts {gap:.4g} away from the current legs {rho.tolist()}"
         return None
 
     def _execute(self, goal_handle):
         result = _Result()
-        if not self._busy.acquire(blocking=False):
-            goal_handle.abort()
-            result.error_code, result.reason = _Result.INVALID_TRAJECTORY, "another goal is executing"
-            return self._finish(result)
         try:
             return self._run(goal_handle, result)
+        except Exception as exc:  # a bug must not take the driver down
+            self.get_logger().error(f"internal error executing a trajectory: {exc!r}")
+            return self._abort(goal_handle, result, _Result.INVALID_TRAJECTORY,
+                               f"internal error: {exc!r}", None)
         finally:
             with self._lock:
                 self.velocity = np.zeros(3)
-            self._busy.release()
+                self._active = False
 
     def _run(self, goal_handle, result):
         trajectory = goal_handle.request.trajectory
-        problem = self._check(trajectory)
-        if problem is not None:
-            result.error_code, result.reason = problem
-            goal_handle.abort()
-            return self._finish(result)
         positions = np.array([list(p.positions) for p in trajectory.points])
         times = np.array([_seconds(p.time_from_start) for p in trajectory.points])
+        # A reset may have moved the platform since the goal was accepted.
+        moved = self._start_gap(positions[0])
+        if moved is not None:
+            return self._abort(goal_handle, result, _Result.START_MISMATCH, moved, None)
         scale = self.get_parameter("time_scale").value
         abort_margin = self.get_parameter("abort_margin").value
         period = 1.0 / self.get_parameter("rate").value
@@ -239,6 +324,9 @@ class Rpr3Driver(Node):
                 goal_handle.canceled()
                 result.error_code, result.reason = _Result.CANCELED, "canceled"
                 return self._finish(result, smallest)
+            if self._stopping.is_set():
+                return self._abort(goal_handle, result, _Result.CANCELED,
+                                   "the driver is shutting down", smallest)
             previous = elapsed
             elapsed = min((time.monotonic() - begin) * scale, times[-1])
             target = np.array([np.interp(elapsed, times, positions[:, j]) for j in range(3)])
@@ -247,32 +335,37 @@ class Rpr3Driver(Node):
             between = (times > previous) & (times < elapsed)
             rho, pose, _ = self.state()
             followed = self._follow(pose, rho, list(positions[between]) + [target])
+            at = f"at t = {elapsed:.3f} s"
             if followed is None:
                 return self._abort(goal_handle, result, _Result.SINGULARITY_ABORT,
-                                   "the platform cannot follow the legs: singularity", smallest)
+                                   f"the platform cannot follow the legs {at}: a singularity "
+                                   f"(margin {smallest:.2e} before it)", smallest)
             (x, y, alpha), margin, extreme = followed
-            new_pose = (x, y, math.atan2(math.sin(alpha), math.cos(alpha)))
             if math.copysign(1.0, extreme) != sign:
                 return self._abort(goal_handle, result, _Result.ASSEMBLY_MODE_LEFT,
-                                   "det(Jx) would change sign: the platform would leave its "
-                                   "assembly mode", smallest)
+                                   f"det(Jx) would change sign {at} (margin {extreme:+.2e}): "
+                                   "the platform would leave its assembly mode", smallest)
             if abs(extreme) < abort_margin:
                 return self._abort(goal_handle, result, _Result.SINGULARITY_ABORT,
                                    f"singularity margin would fall to {abs(extreme):.2e} "
-                                   f"< {abort_margin:g}", min(smallest, abs(extreme)))
+                                   f"< abort_margin {abort_margin:g} {at}",
+                                   min(smallest, abs(extreme)))
             smallest = min(smallest, abs(extreme))
+            new_pose = np.array([x, y, math.atan2(math.sin(alpha), math.cos(alpha))])
             with self._lock:
                 self.velocity = _slope(times, positions, elapsed)
-                self.rho, self.pose, self.margin = target, np.array(new_pose), margin
+                self.rho, self.pose, self.margin = target, new_pose, margin
             feedback.progress = float(elapsed / times[-1]) if times[-1] > 0 else 1.0
             feedback.singularity_margin = abs(margin)
             feedback.time_from_start = duration_msg(elapsed)
-            feedback.pose = PlatformPose(x=new_pose[0], y=new_pose[1], alpha=new_pose[2])
+            feedback.pose = _pose_msg(new_pose)
             goal_handle.publish_feedback(feedback)
             if elapsed >= times[-1]:
                 break
             time.sleep(period)
         goal_handle.succeed()
+        with self._lock:
+            self._holding = ""
         result.error_code = _Result.SUCCESS
         return self._finish(result, smallest)
 
@@ -295,15 +388,23 @@ class Rpr3Driver(Node):
 
     def _abort(self, goal_handle, result, code, reason, smallest):
         self.get_logger().warning(f"aborting the trajectory and holding still: {reason}")
+        if code in (_Result.SINGULARITY_ABORT, _Result.ASSEMBLY_MODE_LEFT):
+            with self._lock:
+                self._holding = f"holding after an abort: {reason}"
         goal_handle.abort()
         result.error_code, result.reason = code, reason
+        self._publish_diagnostics()
         return self._finish(result, smallest)
 
-    def _finish(self, result, smallest=None):
+    def _finish(self, result, smallest):
         _, pose, margin = self.state()
-        result.final_pose = PlatformPose(x=float(pose[0]), y=float(pose[1]), alpha=float(pose[2]))
+        result.final_pose = _pose_msg(pose)
         result.min_singularity_margin = float(abs(margin) if smallest is None else smallest)
         return result
+
+    def prepare_shutdown(self):
+        """End a trajectory in execution now (called by ``main`` on SIGINT)."""
+        self._stopping.set()
 
 
 def main(args=None):

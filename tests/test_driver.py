@@ -1,0 +1,277 @@
+"""The simulated driver on control conventions: goals validated and rejected
+when they arrive, one goal at a time, aborts that say why, diagnostics by
+margin, hostile resets and goals answered with codes.  A driver node and a
+client over real DDS, spun by one executor thread."""
+
+import collections
+import math
+import threading
+import time
+
+import numpy as np
+import pytest
+import rclpy
+from builtin_interfaces.msg import Duration
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from hypothesis import HealthCheck, given, settings, strategies as st
+from rclpy.action import ActionClient
+from rclpy.executors import MultiThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rpr3_gwr_core.geometry import Geometry
+from rpr3_gwr_core.kinematics import inverse_kinematics
+from rpr3_gwr_msgs.action import ExecuteTrajectory
+from rpr3_gwr_msgs.msg import Configuration
+from rpr3_gwr_msgs.srv import ResetDriver
+from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
+from rpr3_gwr_nodes.rpr3_driver import Rpr3Driver
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+D = math.radians
+Q1 = (17.0, 12.0, 18.0, D(122.82))
+NAMES = ["rho1", "rho2", "rho3"]
+TIMEOUT = 30.0
+_Result = ExecuteTrajectory.Result
+RESULT_CODES = {getattr(_Result, n): n for n in dir(_Result)
+                if n.isupper() and isinstance(getattr(_Result, n), int)}
+RESET_CODES = {getattr(ResetDriver.Response, n): n for n in dir(ResetDriver.Response)
+               if n.startswith("ERROR_")}
+
+
+def _wait(future, timeout=TIMEOUT):
+    done = threading.Event()
+    future.add_done_callback(lambda _: done.set())
+    assert done.wait(timeout), f"no answer within {timeout} s"
+    return future.result()
+
+
+def _stamp(seconds):
+    nanoseconds = int(round(seconds * 1e9))
+    return Duration(sec=nanoseconds // 10**9, nanosec=nanoseconds % 10**9)
+
+
+def _trajectory(points, times, names=NAMES):
+    return JointTrajectory(joint_names=list(names), points=[
+        JointTrajectoryPoint(positions=[float(v) for v in p], time_from_start=t)
+        for p, t in zip(points, times)])
+
+
+def _line(start, end, seconds, n=21):
+    """Straight legs from ``start`` to ``end`` in ``seconds``."""
+    t = np.linspace(0.0, 1.0, n)
+    points = np.asarray(start)[None, :] * (1 - t)[:, None] + np.asarray(end)[None, :] * t[:, None]
+    return _trajectory(points, [_stamp(seconds * k) for k in t])
+
+
+class DriverUnderTest:
+    def __init__(self, context):
+        self.driver = Rpr3Driver(context=context, parameter_overrides=[
+            Parameter("time_scale", value=20.0), Parameter("rate", value=100.0)])
+        self.client = Node("driver_test_client", context=context)
+        self.reset_client = self.client.create_client(ResetDriver, "reset")
+        self.action_client = ActionClient(self.client, ExecuteTrajectory, "execute_trajectory")
+        self.diagnostics = []
+        self.client.create_subscription(DiagnosticArray, "/diagnostics",
+                                        self.diagnostics.append, 10)
+        self.executor = MultiThreadedExecutor(num_threads=4, context=context)
+        for node in (self.driver, self.client):
+            self.executor.add_node(node)
+        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
+        self.thread.start()
+        assert self.reset_client.wait_for_service(timeout_sec=TIMEOUT)
+        assert self.action_client.wait_for_server(timeout_sec=TIMEOUT)
+
+    def reset(self, configuration):
+        c = Configuration(rho1=configuration[0], rho2=configuration[1], rho3=configuration[2],
+                          alpha=configuration[3])
+        return _wait(self.reset_client.call_async(ResetDriver.Request(configuration=c)))
+
+    def send(self, trajectory):
+        return _wait(self.action_client.send_goal_async(ExecuteTrajectory.Goal(
+            trajectory=trajectory)))
+
+    def execute(self, trajectory):
+        handle = self.send(trajectory)
+        assert handle.accepted
+        return _wait(handle.get_result_async(), timeout=120.0).result
+
+    def level_after(self, since, timeout=5.0):
+        """The level of the first diagnostics published after index ``since``."""
+        deadline = time.monotonic() + timeout
+        while len(self.diagnostics) <= since and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert len(self.diagnostics) > since, "no diagnostics published"
+        return self.diagnostics[since].status[0].level
+
+    def close(self):
+        self.executor.shutdown(timeout_sec=10.0)
+        self.thread.join(timeout=10.0)
+        self.client.destroy_node()
+        self.driver.destroy_node()
+
+
+@pytest.fixture(scope="module")
+def rig():
+    from rclpy.context import Context
+
+    context = Context()
+    rclpy.init(context=context)
+    running = DriverUnderTest(context)
+    try:
+        yield running
+    finally:
+        running.close()
+        rclpy.try_shutdown(context=context)
+
+
+@pytest.mark.parametrize("configuration, code", [
+    ((17.0, 1e100, 18.0, 0.0), ResetDriver.Response.ERROR_OUT_OF_RANGE),
+    ((1e308, 1e308, 1e308, 0.0), ResetDriver.Response.ERROR_OUT_OF_RANGE),
+    ((17.0, 60.0, 18.0, 0.0), ResetDriver.Response.ERROR_OUT_OF_RANGE),
+    ((17.0, math.nan, 18.0, 0.0), ResetDriver.Response.ERROR_INVALID_INPUT),
+    ((17.0, 12.0, 18.0, math.inf), ResetDriver.Response.ERROR_INVALID_INPUT),
+    ((17.0, -1.0, 18.0, 0.0), ResetDriver.Response.ERROR_INVALID_INPUT),
+    ((17.0, 2.0, 45.0, 0.0), ResetDriver.Response.ERROR_NO_SOLUTION),
+    ((17.0, 12.0, 18.0, 0.0), ResetDriver.Response.ERROR_NO_ASSEMBLY_MODE),
+])
+def test_bad_resets_get_their_code_and_the_driver_still_serves(rig, configuration, code):
+    response = rig.reset(configuration)
+    assert not response.success and response.error_code == code, response.error_msg
+    assert response.error_msg
+    assert rig.reset(Q1).success
+
+
+def _bad_goals():
+    start = np.array(Q1[:3])
+    later = start + [0.0, 0.5, 0.0]
+    return {
+        "empty": JointTrajectory(joint_names=NAMES),
+        "wrong names": _trajectory([start], [_stamp(0)], names=["a", "b", "c"]),
+        "not finite": _trajectory([start, [17.0, math.nan, 18.0]], [_stamp(0), _stamp(1)]),
+        "out of range": _trajectory([start, [17.0, 12.0, 80.0]], [_stamp(0), _stamp(10)]),
+        "negative stamp": _trajectory([start, later], [Duration(sec=-2), Duration(sec=-1)]),
+        "equal stamps": _trajectory([start, later], [_stamp(0), _stamp(0)]),
+        "0.5 in 1 ns": _trajectory([start, later], [_stamp(0), Duration(nanosec=1)]),
+        "elsewhere": _trajectory([[17.0, 30.0, 30.0]], [_stamp(0)]),
+    }
+
+
+@pytest.mark.parametrize("name", list(_bad_goals()))
+def test_bad_goals_are_rejected_when_they_arrive(rig, name):
+    assert rig.reset(Q1).success
+    assert not rig.send(_bad_goals()[name]).accepted
+    good = _line(Q1[:3], np.array(Q1[:3]) + [0.0, 0.25, 0.0], 1.0)
+    assert rig.execute(good).error_code == _Result.SUCCESS
+
+
+def test_a_second_goal_is_rejected_while_one_executes(rig):
+    assert rig.reset(Q1).success
+    slow = _line(Q1[:3], np.array(Q1[:3]) + [0.0, 0.5, 0.0], 40.0)  # 2 s at time_scale 20
+    first = rig.send(slow)
+    assert first.accepted
+    try:
+        time.sleep(0.2)
+        assert not rig.send(slow).accepted
+        busy = rig.reset(Q1)
+        assert busy.error_code == ResetDriver.Response.ERROR_BUSY
+    finally:
+        _wait(first.cancel_goal_async())
+    assert _wait(first.get_result_async()).result.error_code == _Result.CANCELED
+
+
+def test_an_abort_says_why_with_its_margin_and_diagnostics_go_to_error(rig):
+    assert rig.reset(Q1).success
+    seen = len(rig.diagnostics)
+    assert rig.level_after(seen) == DiagnosticStatus.OK
+    # Straight legs from q1 towards the far corner cross the singular locus.
+    result = rig.execute(_line(Q1[:3], (17.0, 32.0, 6.0), 10.0, n=41))
+    assert result.error_code in (_Result.SINGULARITY_ABORT, _Result.ASSEMBLY_MODE_LEFT)
+    assert "margin" in result.reason and "t = " in result.reason, result.reason
+    seen = len(rig.diagnostics)
+    level = rig.level_after(seen)
+    assert level == DiagnosticStatus.ERROR
+    assert "abort" in rig.diagnostics[seen].status[0].message
+    assert rig.reset(Q1).success
+    seen = len(rig.diagnostics)
+    assert rig.level_after(seen) == DiagnosticStatus.OK
+
+
+def test_the_driver_takes_the_builders_geometry_parameters(ros_context):
+    geometry = Geometry(d1=16.0)
+    pose = (5.0, 16.0, 2.0)
+    start = [*inverse_kinematics(pose, geometry), pose[2]]
+    driver = Rpr3Driver(context=ros_context, parameter_overrides=[
+        Parameter("d1", value=16.0), Parameter("initial_configuration", value=start)])
+    builder = RoadmapBuilder(context=ros_context)
+    try:
+        names = ("a1", "a2", "a3", "d1", "d3", "beta")
+        assert all(driver.has_parameter(n) and builder.has_parameter(n) for n in names)
+        assert driver.geometry.d1 == 16.0
+        np.testing.assert_allclose(driver.state()[1], pose)
+        assert driver.describe_parameter("d1").read_only
+    finally:
+        driver.destroy_node()
+        builder.destroy_node()
+
+
+# --- fuzzing --------------------------------------------------------------------------------
+
+HOSTILE = [math.nan, math.inf, -math.inf, 1e308, -1e308, 1e100, 5e-324, -0.0, -1.0, 50.0,
+           50.0001]
+number = st.one_of(st.floats(0.0, 50.0), st.sampled_from(HOSTILE))
+angle = st.one_of(st.floats(-math.pi, math.pi), st.sampled_from(HOSTILE))
+outcomes = collections.Counter()
+
+
+@settings(max_examples=150, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(configuration=st.one_of(st.tuples(st.just(17.0), number, number, angle),
+                               st.tuples(number, number, number, angle)))
+def test_fuzzed_resets_get_a_code(rig, configuration):
+    response = rig.reset(configuration)
+    assert response.error_code in RESET_CODES
+    assert response.success == (response.error_code == ResetDriver.Response.ERROR_NONE)
+    assert response.success or response.error_msg
+    outcomes["reset " + RESET_CODES[response.error_code]] += 1
+
+
+@st.composite
+def goals(draw):
+    n = draw(st.integers(0, 6))
+    start = np.array(Q1[:3])
+    points = [start] + [start + draw(st.tuples(*[st.floats(-0.3, 0.3)] * 3))
+                        for _ in range(n - 1)]
+    points = [[draw(st.one_of(st.just(v), st.sampled_from(HOSTILE))) if draw(st.booleans())
+               and draw(st.integers(0, 4)) == 0 else v for v in p] for p in points[:n]]
+    seconds = st.one_of(st.floats(0.0, 2.0), st.sampled_from([0.0, 1e-9, -1.0, 3e9]))
+    stamps = sorted(draw(seconds) for _ in range(n)) if draw(st.booleans()) else [
+        draw(seconds) for _ in range(n)]
+    names = draw(st.sampled_from([NAMES, NAMES, ["rho1", "rho2"], ["a", "b", "c"]]))
+    return JointTrajectory(joint_names=names, points=[
+        JointTrajectoryPoint(positions=[float(v) for v in p],
+                             time_from_start=Duration(sec=int(math.floor(t)),
+                                                      nanosec=int((t % 1) * 1e9) % 10**9))
+        for p, t in zip(points, stamps)])
+
+
+@settings(max_examples=150, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(trajectory=goals())
+def test_fuzzed_goals_are_rejected_or_end_with_a_code(rig, trajectory):
+    if not rig.driver.state()[0].tolist() == list(Q1[:3]):
+        assert rig.reset(Q1).success
+    handle = rig.send(trajectory)
+    if not handle.accepted:
+        outcomes["goal rejected"] += 1
+        return
+    result = _wait(handle.get_result_async(), timeout=60.0).result
+    assert result.error_code in RESULT_CODES
+    outcomes["goal " + RESULT_CODES[result.error_code]] += 1
+
+
+def test_the_driver_serves_after_the_fuzzing(rig):
+    print(f"\ndriver fuzz outcomes: {dict(sorted(outcomes.items()))}")
+    assert sum(outcomes.values()) >= 300
+    assert rig.reset(Q1).success
+    good = _line(Q1[:3], np.array(Q1[:3]) + [0.0, 0.25, 0.0], 1.0)
+    assert rig.execute(good).error_code == _Result.SUCCESS
