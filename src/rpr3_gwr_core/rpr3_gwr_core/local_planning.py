@@ -31,6 +31,7 @@ __all__ = ["LocalPlanner", "LocalPath", "DEFAULT_CLEARANCE_WEIGHT"]
 
 DEFAULT_CLEARANCE_WEIGHT = 10.0
 _LOW_MARGIN_FACTOR = 100.0
+_UNRESOLVED_DEPTH = 0.5
 
 
 @dataclass(frozen=True)
@@ -117,14 +118,20 @@ class LocalPlanner:
         return self._profiles[pid]
 
     def clearance(self, pid):
-        """Distance of each cell of a patch to its nearest outside cell [cells]."""
+        """Distance of each cell of a patch to its nearest outside cell [cells].
+
+        Cells the patch took from unresolved sets (region 0, see
+        :mod:`~rpr3_gwr_core.segmentation`) lie on the singular locus: they
+        count as outside for the others, and as half a cell deep themselves.
+        """
         seg = self.segmentation
         patch = seg.patches[pid]
         shape = seg.field.grid.shape
+        own = seg.region[patch.cells] == patch.region
         mask = np.zeros(shape, dtype=bool)
-        mask.flat[patch.cells] = True
+        mask.flat[patch.cells[own]] = True
         depth = distance_transform_edt(np.pad(mask, 1))[1:-1, 1:-1]
-        return depth.ravel()[patch.cells]
+        return np.where(own, depth.ravel()[patch.cells], _UNRESOLVED_DEPTH)
 
     def _build_profile(self, pid):
         patch = self.segmentation.patches[pid]
