@@ -135,3 +135,10 @@ def test_a_local_failure_tries_the_next_global_path(paper_roadmap):
     planner.local.plan = cut_first
     plan = planner.plan(Q1, Q2)
     assert plan.path_index > 0 and plan.validation.ok
+
+
+def test_cells_taken_from_unresolved_sets_do_not_draw_paths_to_the_singular_curve(planner):
+    # They lie on the singular locus; counted as deep patch cells they made
+    # the paper's mode change pass at a margin of 0.0019 instead of 0.009.
+    plan = planner.plan((17, 20, 25, D(29.47)), (17, 20, 25, D(96.13)))
+    assert plan.validation.min_margin > 5e-3
