@@ -19,8 +19,9 @@ import networkx as nx
 import numpy as np
 
 from rpr3_gwr_core.exceptions import GWRError
-from rpr3_gwr_core.planner import PlanOptions, Planner
-from rpr3_gwr_core.roadmap import build_roadmap
+from rpr3_gwr_core.planning.planner import PlanOptions, Planner
+from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID
+from rpr3_gwr_core.workspace.roadmap import build_roadmap
 
 EXAMPLES = {
     "two_configurations": ((17, 12, 18, math.radians(122.82)), (17, 10, 25, math.radians(-24.24))),
@@ -44,7 +45,7 @@ def random_configuration(roadmap, rng):
     patch = seg.patches[pid]
     k = rng.integers(patch.cells.size)
     cell, slot = patch.cells[k], patch.slots[k]
-    rho = roadmap.grid.rho_of(cell)
+    rho = roadmap.grid.joints_of(cell)
     return (rho[0], rho[1], rho[2], float(seg.field.poses[cell, slot, 2])), pid
 
 
@@ -54,7 +55,7 @@ def main():
     parser.add_argument("--repeat", type=int, default=21)
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
-    roadmap = build_roadmap()
+    roadmap = build_roadmap(PAPER_GEOMETRY, PAPER_GRID)
     planner = Planner(roadmap)
     for name, (start, goal) in EXAMPLES.items():
         planner.plan(start, goal)  # warm the patch profiles

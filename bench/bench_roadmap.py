@@ -14,20 +14,18 @@ import subprocess
 import sys
 import time
 
-from rpr3_gwr_core.field import Grid
-from rpr3_gwr_core.roadmap import build_roadmap
+from rpr3_gwr_core import PAPER_GEOMETRY, build_roadmap, rho1_slice
 
 # VmHWM, unlike ru_maxrss, is not inherited across exec from the parent.
 _PEAK = """
 import sys
-from rpr3_gwr_core.field import Grid
-from rpr3_gwr_core.roadmap import build_roadmap
+from rpr3_gwr_core import PAPER_GEOMETRY, build_roadmap, rho1_slice
 def hwm():
     for line in open("/proc/self/status"):
         if line.startswith("VmHWM:"):
             return int(line.split()[1])
 before = hwm()
-build_roadmap(grid=Grid(step=float(sys.argv[1])))
+build_roadmap(PAPER_GEOMETRY, rho1_slice(step=float(sys.argv[1])))
 print(before, hwm())
 """
 
@@ -37,13 +35,13 @@ def main():
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--steps", type=float, nargs="+", default=[0.25, 0.125, 0.0625])
     args = parser.parse_args()
-    build_roadmap(grid=Grid(step=1.0))  # warm caches of numpy/scipy code paths
+    build_roadmap(PAPER_GEOMETRY, rho1_slice(step=1.0))  # warm caches of numpy/scipy code paths
     for step in args.steps:
-        grid = Grid(step=step)
+        grid = rho1_slice(step=step)
         times, stages = [], []
         for _ in range(args.repeat):
             start = time.perf_counter()
-            roadmap = build_roadmap(grid=grid)
+            roadmap = build_roadmap(PAPER_GEOMETRY, grid)
             times.append(time.perf_counter() - start)
             stages.append(roadmap.timings)
         peak = subprocess.run([sys.executable, "-c", _PEAK, str(step)], capture_output=True,

@@ -18,8 +18,8 @@ from rclpy.action import ActionClient
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rpr3_gwr_core.geometry import Geometry
-from rpr3_gwr_core.kinematics import inverse_kinematics
+from rpr3_gwr_core.mechanisms.rpr3 import Geometry
+from rpr3_gwr_core.mechanisms.rpr3 import inverse_kinematics
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import Configuration
 from rpr3_gwr_msgs.srv import ResetDriver
@@ -186,7 +186,7 @@ def test_an_abort_says_why_with_its_margin_and_diagnostics_go_to_error(rig):
     # Straight legs from q1 towards the far corner cross the singular locus.
     result = rig.execute(_line(Q1[:3], (17.0, 32.0, 6.0), 10.0, n=41))
     assert result.error_code in (_Result.SINGULARITY_ABORT, _Result.ASSEMBLY_MODE_LEFT)
-    assert "margin" in result.reason and "t = " in result.reason, result.reason
+    assert "margin" in result.error_msg and "t = " in result.error_msg, result.error_msg
     seen = len(rig.diagnostics)
     level = rig.level_after(seen)
     assert level == DiagnosticStatus.ERROR

@@ -15,9 +15,10 @@ def _interfaces():
 def test_the_package_ships_the_designed_interfaces():
     assert _interfaces() == [
         ("action", "ExecuteTrajectory"),
-        ("msg", "Configuration"), ("msg", "Gate"), ("msg", "Geometry"), ("msg", "GlobalPath"),
-        ("msg", "Grid"), ("msg", "NSolutionField"), ("msg", "PlatformPose"),
-        ("msg", "WorkspacePatch"), ("msg", "WorkspaceRoadmap"),
+        ("msg", "AxisLinks"), ("msg", "Configuration"), ("msg", "FixedJoint"), ("msg", "Gate"),
+        ("msg", "Geometry"), ("msg", "GlobalPath"), ("msg", "Grid"), ("msg", "GridAxis"),
+        ("msg", "NSolutionField"), ("msg", "PlatformPose"), ("msg", "WorkspacePatch"),
+        ("msg", "WorkspaceRoadmap"),
         ("srv", "PlanPath"), ("srv", "ResetDriver"),
     ]
 
@@ -33,11 +34,12 @@ def test_every_interface_imports_and_instantiates():
             assert type(instance).__name__ == part.__name__
 
 
-def test_error_constants_are_distinct():
+def test_constants_of_each_group_are_distinct():
     from rpr3_gwr_msgs.action import ExecuteTrajectory
-    from rpr3_gwr_msgs.srv import PlanPath
+    from rpr3_gwr_msgs.srv import PlanPath, ResetDriver
 
-    for cls in (PlanPath.Response, ExecuteTrajectory.Result):
-        values = [getattr(cls, n) for n in dir(cls)
-                  if n.isupper() and isinstance(getattr(cls, n), int)]
+    for cls, prefix in ((PlanPath.Response, "ERROR_"), (PlanPath.Response, "FEASIBILITY_"),
+                        (ResetDriver.Response, "ERROR_"), (ExecuteTrajectory.Result, "")):
+        values = [getattr(cls, n) for n in dir(cls) if n.isupper() and n.startswith(prefix)
+                  and isinstance(getattr(cls, n), int)]
         assert len(values) == len(set(values)) > 3

@@ -12,12 +12,12 @@ import time
 
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rpr3_gwr_core.field import Grid
-from rpr3_gwr_core.roadmap import build_roadmap
+from rpr3_gwr_core.paper import PAPER_GEOMETRY, rho1_slice
+from rpr3_gwr_core.workspace.roadmap import build_roadmap
 from rpr3_gwr_msgs.msg import Configuration, NSolutionField, WorkspaceRoadmap
 from rpr3_gwr_msgs.srv import PlanPath
 from rpr3_gwr_nodes.conversions import roadmap_to_msgs
-from rpr3_gwr_nodes.roadmap_builder import LATCHED_QOS
+from rpr3_gwr_nodes.profiles import LATCHED_QOS
 from std_msgs.msg import Header
 
 PLANNER = (pathlib.Path(__file__).resolve().parents[1] / "ros2_ws" / "install" / "rpr3_gwr_nodes"
@@ -35,7 +35,7 @@ def test_sigint_with_requests_in_flight_exits_cleanly(ros_context):
     spinner.start()
     futures = []
     try:
-        field_msg, roadmap_msg = roadmap_to_msgs(build_roadmap(grid=Grid(step=0.25)), Header())
+        field_msg, roadmap_msg = roadmap_to_msgs(build_roadmap(PAPER_GEOMETRY, rho1_slice(step=0.25)), Header())
         node.create_publisher(NSolutionField, "field", LATCHED_QOS).publish(field_msg)
         node.create_publisher(WorkspaceRoadmap, "roadmap", LATCHED_QOS).publish(roadmap_msg)
         client = node.create_client(PlanPath, "plan_path")

@@ -14,7 +14,7 @@ def _answer(request, response):
     """Echo the request back in a response with non-trivial contents."""
     response.success = True
     response.error_code = PlanPath.Response.ERROR_NONE
-    response.feasibility = "connected"
+    response.feasibility = PlanPath.Response.FEASIBILITY_CONNECTED
     response.global_paths = [GlobalPath(patch_ids=[64, 42, 24, 12], cost=31.5),
                              GlobalPath(patch_ids=[64, 56, 24, 12], cost=29.25)]
     response.path_index = 1

@@ -13,13 +13,14 @@ import rclpy
 from hypothesis import HealthCheck, given, settings, strategies as st
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
-from rpr3_gwr_core.kinematics import direct_kinematics
-from rpr3_gwr_core.roadmap import build_roadmap
+from rpr3_gwr_core.mechanisms.rpr3 import direct_kinematics
+from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID
+from rpr3_gwr_core.workspace.roadmap import build_roadmap
 from rpr3_gwr_msgs.msg import Configuration, NSolutionField, WorkspaceRoadmap
 from rpr3_gwr_msgs.srv import PlanPath
 from rpr3_gwr_nodes.conversions import roadmap_to_msgs
 from rpr3_gwr_nodes.planner import PlannerNode
-from rpr3_gwr_nodes.roadmap_builder import LATCHED_QOS
+from rpr3_gwr_nodes.profiles import LATCHED_QOS
 from std_msgs.msg import Header
 
 D = math.radians
@@ -41,7 +42,7 @@ class PlannerUnderTest:
     def __init__(self, context):
         self.stamp = Header(frame_id="rpr3_base")
         self.stamp.stamp.sec, self.stamp.stamp.nanosec = 1_700_000_000, 123
-        field_msg, roadmap_msg = roadmap_to_msgs(build_roadmap(), self.stamp)
+        field_msg, roadmap_msg = roadmap_to_msgs(build_roadmap(PAPER_GEOMETRY, PAPER_GRID), self.stamp)
         self.planner = PlannerNode(context=context)
         self.feeder = Node("roadmap_feeder", context=context)
         self.feeder.create_publisher(NSolutionField, "field", LATCHED_QOS).publish(field_msg)

@@ -9,7 +9,8 @@ from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rpr3_gwr_msgs.msg import NSolutionField
-from rpr3_gwr_nodes.roadmap_builder import LATCHED_QOS, RoadmapBuilder
+from rpr3_gwr_nodes.profiles import LATCHED_QOS
+from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
 
 TIMEOUT = 60.0
 
@@ -32,7 +33,7 @@ def test_builder_rebuilds_on_rho1_and_refuses_bad_grids(ros_context):
     spinner.start()
     try:
         assert arrived.wait(TIMEOUT), "no field published"
-        assert fields[-1].grid.rho1 == 17.0 and fields[-1].grid.rho2_count == 101
+        assert fields[-1].grid.fixed[0].value == 17.0 and fields[-1].grid.axes[0].count == 101
         for bad in (Parameter("step", value=-0.5), Parameter("rho2_range", value=[10.0, 5.0]),
                     Parameter("rho1", value=0.0), Parameter("step", value=0.001)):
             result = builder.set_parameters([bad])[0]
@@ -41,8 +42,8 @@ def test_builder_rebuilds_on_rho1_and_refuses_bad_grids(ros_context):
         arrived.clear()
         assert builder.set_parameters([Parameter("rho1", value=13.0)])[0].successful
         assert arrived.wait(TIMEOUT), "no field republished after the change"
-        assert fields[-1].grid.rho1 == 13.0
-        assert builder.roadmap.grid.rho1 == 13.0
+        assert fields[-1].grid.fixed[0].value == 13.0
+        assert builder.roadmap.grid.fixed_value(0) == 13.0
     finally:
         executor.shutdown(timeout_sec=10.0)
         spinner.join(timeout=10.0)
@@ -88,7 +89,7 @@ def test_builder_refuses_grids_without_a_roadmap_and_keeps_the_last_good(ros_con
         assert builder.get_parameter("rho3_range").value == [0.0, 50.0]
         time.sleep(0.5)
         assert fields[-1] is good and len(builder.roadmap.segmentation.patches) > 0
-        assert builder.roadmap.grid.rho2_range == (0.0, 50.0)
+        assert (builder.roadmap.grid.axes[0].low, builder.roadmap.grid.axes[0].high) == (0.0, 50.0)
     finally:
         executor.shutdown(timeout_sec=10.0)
         spinner.join(timeout=10.0)

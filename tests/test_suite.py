@@ -13,14 +13,15 @@ from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from rosbags.rosbag2 import Reader
-from rpr3_gwr_core.kinematics import inverse_kinematics, singularity_margin
+from rpr3_gwr_core.mechanisms.rpr3 import inverse_kinematics, singularity_margin
 from scipy.optimize import brentq
 from rosbags.typesys import Stores, get_typestore
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import Configuration, NSolutionField, WorkspaceRoadmap
 from rpr3_gwr_msgs.srv import PlanPath, ResetDriver
 from rpr3_gwr_nodes.planner import PlannerNode
-from rpr3_gwr_nodes.roadmap_builder import LATCHED_QOS, RoadmapBuilder
+from rpr3_gwr_nodes.profiles import LATCHED_QOS
+from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
 from rpr3_gwr_nodes.rpr3_driver import Rpr3Driver
 from rpr3_gwr_nodes.trajectory_recorder import TrajectoryRecorder
 from rclpy.parameter import Parameter
@@ -155,7 +156,7 @@ def test_whole_chain_plan_execute_record(suite):
     assert response.success, response.error_msg
     before = len(suite.joint_states)
     result = suite.execute(response.trajectory)
-    assert result.error_code == ExecuteTrajectory.Result.SUCCESS, result.reason
+    assert result.error_code == ExecuteTrajectory.Result.SUCCESS, result.error_msg
     assert abs(result.final_pose.alpha - Q2[3]) < D(0.05)
     assert result.min_singularity_margin > 1e-3
     # Joint states of the whole motion arrive, ending at the goal's legs.
@@ -223,7 +224,7 @@ def test_driver_aborts_a_trajectory_through_a_singularity_and_holds(suite):
         trajectory.points.append(point)
     result = suite.execute(trajectory)
     assert result.error_code in (ExecuteTrajectory.Result.SINGULARITY_ABORT,
-                                 ExecuteTrajectory.Result.ASSEMBLY_MODE_LEFT), result.reason
+                                 ExecuteTrajectory.Result.ASSEMBLY_MODE_LEFT), result.error_msg
     held = suite.driver.state()
     time.sleep(0.3)
     after = suite.driver.state()

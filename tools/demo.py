@@ -32,12 +32,12 @@ from rclpy.action import ActionClient  # noqa: E402
 from rclpy.executors import MultiThreadedExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 from rosbags.rosbag2 import Reader  # noqa: E402
-from rpr3_gwr_core.figures import field_figure, plan_figure, roadmap_figure  # noqa: E402
+from rpr3_gwr_core.io.figures import field_figure, plan_figure, roadmap_figure  # noqa: E402
 from rpr3_gwr_msgs.action import ExecuteTrajectory  # noqa: E402
 from rpr3_gwr_msgs.msg import Configuration, NSolutionField, WorkspaceRoadmap  # noqa: E402
 from rpr3_gwr_msgs.srv import PlanPath, ResetDriver  # noqa: E402
 from rpr3_gwr_nodes.conversions import roadmap_from_msgs  # noqa: E402
-from rpr3_gwr_nodes.roadmap_builder import LATCHED_QOS  # noqa: E402
+from rpr3_gwr_nodes.profiles import LATCHED_QOS  # noqa: E402
 
 EXAMPLES = {
     "paper_5_2_two_configurations": ((17.0, 12.0, 18.0, 122.82), (17.0, 10.0, 25.0, -24.24)),
@@ -103,7 +103,7 @@ def main():
             raise TimeoutError("no roadmap published")
         roadmap = roadmap_from_msgs(received["field"], received["roadmap"])
         seg = roadmap.segmentation
-        print(f"roadmap received: rho1 = {roadmap.grid.rho1:g}, {seg.n_regions} regions, "
+        print(f"roadmap received: rho1 = {roadmap.grid.fixed_value(0):g}, {seg.n_regions} regions, "
               f"{len(seg.patches)} patches, {len(seg.gates)} gates")
         field_figure(roadmap).savefig(OUT / "field.png", dpi=110)
         roadmap_figure(roadmap).savefig(OUT / "roadmap.png", dpi=110)
@@ -136,11 +136,11 @@ def main():
                   f"{length:.1f} length units of legs, {duration:.1f} s; planned in "
                   f"{1e3 * took:.0f} ms; min singularity margin planned "
                   f"{response.min_singularity_margin:.4f}, executed {result.min_singularity_margin:.4f}; "
-                  f"driver: {'done' if result.error_code == 0 else result.reason}, platform at "
+                  f"driver: {'done' if result.error_code == 0 else result.error_msg}, platform at "
                   f"alpha = {math.degrees(result.final_pose.alpha):.2f} deg")
             if result.error_code != 0:
                 code = 1
-            data = {"waypoints": [{"rho": r, "pose": [p.x, p.y, p.alpha]}
+            data = {"waypoints": [{"joints": r, "pose": [p.x, p.y, p.alpha]}
                                   for r, p in zip(legs, response.poses)],
                     "global_paths": [list(g.patch_ids) for g in response.global_paths],
                     "path_index": response.path_index}

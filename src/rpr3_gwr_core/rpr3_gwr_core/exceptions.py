@@ -9,7 +9,7 @@ __all__ = [
     "GWRError",
     "InvalidInputError",
     "OutOfGridError",
-    "Rho1MismatchError",
+    "FixedJointMismatchError",
     "NoSolutionError",
     "AssemblyModeError",
     "SingularityError",
@@ -36,10 +36,10 @@ class OutOfGridError(GWRError, ValueError):
     code = "OUT_OF_GRID"
 
 
-class Rho1MismatchError(GWRError, ValueError):
-    """A configuration's rho1 differs from the roadmap's fixed rho1."""
+class FixedJointMismatchError(GWRError, ValueError):
+    """A configuration's joint differs from the value the roadmap's grid fixes."""
 
-    code = "RHO1_MISMATCH"
+    code = "FIXED_JOINT_MISMATCH"
 
 
 class NoSolutionError(GWRError, ValueError):

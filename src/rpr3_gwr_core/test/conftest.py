@@ -5,10 +5,11 @@ per method."""
 import pytest
 
 from gwr_cases import COARSE_CASES
-from rpr3_gwr_core.field import Grid, compute_field
-from rpr3_gwr_core.geometry import PAPER_GEOMETRY
-from rpr3_gwr_core.roadmap import build_roadmap, roadmap_graph
-from rpr3_gwr_core.segmentation import segment
+from rpr3_gwr_core.paper import PAPER_GRID, rho1_slice
+from rpr3_gwr_core.workspace import compute_field
+from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY
+from rpr3_gwr_core.workspace.roadmap import build_roadmap, roadmap_graph
+from rpr3_gwr_core.workspace.segmentation import segment
 
 
 class CaseCache:
@@ -38,7 +39,7 @@ class CaseCache:
 @pytest.fixture(scope="session")
 def paper_roadmap():
     """The paper's roadmap: default geometry, 401 x 401 grid, rho1 = 17."""
-    return build_roadmap()
+    return build_roadmap(PAPER_GEOMETRY, PAPER_GRID)
 
 
 @pytest.fixture(scope="session")
@@ -49,4 +50,4 @@ def cases():
 @pytest.fixture(scope="session")
 def coarse_paper_roadmap():
     """A cheap roadmap (step 0.5) for export and figure tests."""
-    return build_roadmap(PAPER_GEOMETRY, Grid(step=0.5))
+    return build_roadmap(PAPER_GEOMETRY, rho1_slice(step=0.5))

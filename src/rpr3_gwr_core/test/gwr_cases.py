@@ -5,8 +5,8 @@ import math
 
 import numpy as np
 
-from rpr3_gwr_core.field import Grid
-from rpr3_gwr_core.geometry import PAPER_GEOMETRY, Geometry
+from rpr3_gwr_core.paper import rho1_slice
+from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY, Geometry
 
 # The paper's four example configurations at rho1 = 17: (rho2, rho3, alpha [deg]).
 PAPER_EXAMPLES = [(12.0, 18.0, 122.82), (10.0, 25.0, -24.24),
@@ -17,10 +17,10 @@ OTHER_GEOMETRY = Geometry(a2=(12.0, 0.0), a3=(2.0, 9.0), d1=10.0, d3=12.0, beta=
 # Coarse cases: name -> (geometry, grid).  The other geometry also has tests
 # of its own at rho1 = 7.7 and 10 in test_segmentation.py.
 COARSE_CASES = {
-    "paper_rho17_step0.25": (PAPER_GEOMETRY, Grid(rho1=17.0, step=0.25)),
-    "paper_rho13_step0.25": (PAPER_GEOMETRY, Grid(rho1=13.0, step=0.25)),
-    "paper_rho30_step0.25": (PAPER_GEOMETRY, Grid(rho1=30.0, step=0.25)),
-    "other_rho10.1_step0.25": (OTHER_GEOMETRY, Grid(rho1=10.1, rho2_range=(0.0, 30.0),
+    "paper_rho17_step0.25": (PAPER_GEOMETRY, rho1_slice(rho1=17.0, step=0.25)),
+    "paper_rho13_step0.25": (PAPER_GEOMETRY, rho1_slice(rho1=13.0, step=0.25)),
+    "paper_rho30_step0.25": (PAPER_GEOMETRY, rho1_slice(rho1=30.0, step=0.25)),
+    "other_rho10.1_step0.25": (OTHER_GEOMETRY, rho1_slice(rho1=10.1, rho2_range=(0.0, 30.0),
                                                     rho3_range=(0.0, 30.0), step=0.25)),
 }
 

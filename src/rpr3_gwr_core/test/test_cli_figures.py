@@ -6,8 +6,8 @@ import math
 import networkx as nx
 import pytest
 
-from rpr3_gwr_core.cli import main
-from rpr3_gwr_core.export import roadmap_from_json
+from rpr3_gwr_core.io.cli import main
+from rpr3_gwr_core.io.export import roadmap_from_json
 
 
 def test_cli_dk_prints_the_paper_example_solutions(capsys):
@@ -36,7 +36,7 @@ def test_cli_roadmap_summary_and_output_file(tmp_path, capsys):
     summary = json.loads(capsys.readouterr().out)
     loaded = roadmap_from_json(output.read_text())
     assert len(summary["patches"]) == len(loaded.segmentation.patches) > 0
-    assert summary["grid"]["step"] == 0.5
+    assert [axis["step"] for axis in summary["grid"]["axes"]] == [0.5, 0.5]
     graph = nx.read_gexf(str(gexf), node_type=int)
     assert set(graph.nodes) == set(loaded.segmentation.patches)
 

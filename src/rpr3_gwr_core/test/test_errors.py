@@ -6,11 +6,12 @@ import numpy as np
 import pytest
 
 from rpr3_gwr_core.exceptions import GWRError, InvalidInputError, OutOfGridError
-from rpr3_gwr_core.field import Grid, compute_field
-from rpr3_gwr_core.geometry import Geometry, beta_from_sides
-from rpr3_gwr_core.kinematics import direct_kinematics, direct_kinematics_batch, inverse_kinematics
-from rpr3_gwr_core.rotary_disk import rotary_order
-from rpr3_gwr_core.segmentation import segment
+from rpr3_gwr_core.paper import rho1_slice
+from rpr3_gwr_core.workspace import compute_field
+from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY, Geometry, beta_from_sides
+from rpr3_gwr_core.mechanisms.rpr3 import direct_kinematics, direct_kinematics_batch, inverse_kinematics
+from rpr3_gwr_core.workspace.rotary_disk import rotary_order
+from rpr3_gwr_core.workspace.segmentation import segment
 
 NAN, INF = math.nan, math.inf
 
@@ -49,7 +50,7 @@ def test_direct_kinematics_batch_rejects_bad_shapes_and_values(rho):
 ])
 def test_grid_rejects_bad_values(kwargs):
     with pytest.raises(InvalidInputError):
-        Grid(**kwargs)
+        rho1_slice(**kwargs)
 
 
 @pytest.mark.parametrize("kwargs", [
@@ -81,17 +82,18 @@ def test_beta_from_sides_rejects_non_triangles(sides):
 @pytest.mark.parametrize("point", [(-0.3, 10.0), (10.0, -0.3), (50.3, 10.0), (10.0, 60.0)])
 def test_cell_of_outside_the_grid_raises_out_of_grid(point):
     with pytest.raises(OutOfGridError):
-        Grid(step=0.5).cell_of(*point)
+        rho1_slice(step=0.5).cell_of((17.0, *point))
 
 
 @pytest.mark.parametrize("point", [(NAN, 10.0), (10.0, INF)])
 def test_cell_of_non_finite_raises_a_gwr_error(point):
     with pytest.raises(GWRError):
-        Grid(step=0.5).cell_of(*point)
+        rho1_slice(step=0.5).cell_of((17.0, *point))
 
 
 def _tiny_field():
-    return compute_field(grid=Grid(rho2_range=(10.0, 12.0), rho3_range=(20.0, 22.0), step=1.0))
+    return compute_field(PAPER_GEOMETRY, rho1_slice(rho2_range=(10.0, 12.0), rho3_range=(20.0, 22.0),
+                                                    step=1.0))
 
 
 def test_segment_rejects_an_unknown_method():

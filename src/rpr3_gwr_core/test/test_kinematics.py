@@ -7,8 +7,8 @@ import pytest
 from hypothesis import assume, given, settings, strategies as st
 
 from gwr_cases import PAPER_EXAMPLES
-from rpr3_gwr_core.geometry import PAPER_GEOMETRY, Geometry, beta_from_sides
-from rpr3_gwr_core.kinematics import (MAX_SOLUTIONS, aspect, constraint_residual,
+from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY, Geometry, beta_from_sides
+from rpr3_gwr_core.mechanisms.rpr3 import (MAX_SOLUTIONS, aspect, constraint_residual,
                                       degenerate_orientations, direct_kinematics,
                                       direct_kinematics_batch, inverse_kinematics,
                                       newton_correct, parallel_jacobian, passive_angles,

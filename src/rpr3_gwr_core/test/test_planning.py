@@ -9,15 +9,15 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from scipy.optimize import brentq
 
 from rpr3_gwr_core.exceptions import (AssemblyModeError, InfeasiblePathError, InvalidInputError,
-                                      NoSolutionError, OutOfGridError, Rho1MismatchError,
+                                      NoSolutionError, OutOfGridError, FixedJointMismatchError,
                                       SingularityError)
-from rpr3_gwr_core.field import Grid
-from rpr3_gwr_core.global_planning import feasibility, global_paths
-from rpr3_gwr_core.kinematics import inverse_kinematics, singularity_margin
-from rpr3_gwr_core.planner import PlanOptions, Planner
-from rpr3_gwr_core.roadmap import build_roadmap
-from rpr3_gwr_core.trajectory import chaikin, shortcut, time_parameterize
-from rpr3_gwr_core.validation import validate_path
+from rpr3_gwr_core.paper import PAPER_GEOMETRY, rho1_slice
+from rpr3_gwr_core.planning.global_planning import feasibility, global_paths
+from rpr3_gwr_core.mechanisms.rpr3 import inverse_kinematics, singularity_margin
+from rpr3_gwr_core.planning.planner import PlanOptions, Planner
+from rpr3_gwr_core.workspace.roadmap import build_roadmap
+from rpr3_gwr_core.planning.trajectory import chaikin, shortcut, time_parameterize
+from rpr3_gwr_core.planning.validation import validate_path
 
 D = math.radians
 Q1, Q2 = (17, 12, 18, D(122.82)), (17, 10, 25, D(-24.24))
@@ -46,8 +46,8 @@ def test_first_example_trajectory_crosses_exactly_the_planned_gates(planner, pap
     visited = [int(p) for k, p in enumerate(plan.patches) if k == 0 or p != plan.patches[k - 1]]
     assert tuple(visited) == chosen
     assert plan.validation.ok and plan.validation.min_margin > 1e-3
-    np.testing.assert_allclose(plan.rho[0], Q1[:3])
-    np.testing.assert_allclose(plan.rho[-1], Q2[:3])
+    np.testing.assert_allclose(plan.joints[0], Q1[:3])
+    np.testing.assert_allclose(plan.joints[-1], Q2[:3])
     assert abs(plan.poses[-1, 2] - Q2[3]) < D(0.05)
 
 
@@ -57,7 +57,7 @@ def test_assembly_mode_change_goes_through_regions_3_1_3(planner):
     assert plan.start.patch // 10 == plan.goal.patch // 10 == 3
     assert regions(plan.global_paths[0]) == [3, 1, 3]
     # Same legs at both ends, yet the followed platform ends in the other mode.
-    np.testing.assert_allclose(plan.rho[0], plan.rho[-1])
+    np.testing.assert_allclose(plan.joints[0], plan.joints[-1])
     assert abs(plan.poses[0, 2] - MODE_A[3]) < D(0.05)
     assert abs(plan.poses[-1, 2] - MODE_B[3]) < D(0.05)
     assert plan.validation.ok
@@ -66,17 +66,17 @@ def test_assembly_mode_change_goes_through_regions_3_1_3(planner):
 def test_returned_trajectory_passes_an_independent_validation(planner, paper_roadmap):
     for start, goal in ((Q1, Q2), (MODE_A, MODE_B)):
         plan = planner.plan(start, goal, PlanOptions(smooth=True))
-        again = validate_path(paper_roadmap.geometry, plan.rho, plan.start.pose, plan.goal.pose,
+        again = validate_path(paper_roadmap.mechanism, plan.joints, plan.start.pose, plan.goal.pose,
                               max_step=0.01)
         assert again.ok, again.reason
-        np.testing.assert_allclose(inverse_kinematics(plan.poses), plan.rho, atol=1e-7)
+        np.testing.assert_allclose(inverse_kinematics(plan.poses), plan.joints, atol=1e-7)
 
 
 def test_smoothing_shortens_the_path_and_keeps_the_margin(planner):
     raw = planner.plan(Q1, Q2)
     smooth = planner.plan(Q1, Q2, PlanOptions(smooth=True))
     assert smooth.smoothed
-    length = lambda p: np.sum(np.linalg.norm(np.diff(p.rho, axis=0), axis=1))
+    length = lambda p: np.sum(np.linalg.norm(np.diff(p.joints, axis=0), axis=1))
     assert length(smooth) < length(raw)
     assert smooth.validation.min_margin >= planner.min_margin
 
@@ -94,7 +94,7 @@ def test_between_aspects_is_infeasible_from_the_roadmap_alone(planner):
 
 def test_feasibility_only_returns_paths_without_trajectory(planner):
     plan = planner.plan(Q1, Q2, PlanOptions(feasibility_only=True))
-    assert plan.feasible and plan.rho.shape == (0, 3) and len(plan.global_paths) == 2
+    assert plan.feasible and plan.joints.shape == (0, 3) and len(plan.global_paths) == 2
 
 
 def test_weighted_mode_ranks_by_cost(planner):
@@ -106,7 +106,7 @@ def test_weighted_mode_ranks_by_cost(planner):
 
 def test_start_equal_to_goal_is_a_one_point_trajectory(planner):
     plan = planner.plan(Q1, Q1, PlanOptions(max_velocity=1.0, max_acceleration=1.0))
-    assert plan.rho.shape == (1, 3) and plan.times.tolist() == [0.0]
+    assert plan.joints.shape == (1, 3) and plan.times.tolist() == [0.0]
 
 
 def test_time_parameterisation_respects_the_limits(planner):
@@ -115,7 +115,7 @@ def test_time_parameterisation_respects_the_limits(planner):
     assert np.max(np.abs(plan.velocities)) <= 2.0 + 1e-9
     assert np.max(np.abs(plan.accelerations)) <= 4.0 + 1e-9
     # Between waypoints the legs move at most at the limit too.
-    segment_speed = np.abs(np.diff(plan.rho, axis=0)) / np.diff(plan.times)[:, None]
+    segment_speed = np.abs(np.diff(plan.joints, axis=0)) / np.diff(plan.times)[:, None]
     assert np.max(segment_speed) <= 2.0 + 1e-9
     np.testing.assert_array_equal(plan.velocities[[0, -1]], 0.0)
 
@@ -125,7 +125,7 @@ def test_time_parameterisation_respects_the_limits(planner):
     ((17, 12, float("inf"), 0.0), InvalidInputError),
     ((17, -1, 18, 0.0), InvalidInputError),
     ((17, 60, 18, 0.0), OutOfGridError),
-    ((13, 12, 18, D(122.82)), Rho1MismatchError),
+    ((13, 12, 18, D(122.82)), FixedJointMismatchError),
     ((17, 2, 45, 0.0), NoSolutionError),
     ((17, 12, 18, 0.0), AssemblyModeError),
 ])
@@ -159,7 +159,7 @@ def _random_configuration(roadmap, draw):
     patch = seg.patches[pid]
     k = draw(st.integers(0, patch.cells.size - 1))
     cell, slot = patch.cells[k], patch.slots[k]
-    return (*roadmap.grid.rho_of(cell), float(seg.field.poses[cell, slot, 2])), pid
+    return (*roadmap.grid.joints_of(cell), float(seg.field.poses[cell, slot, 2])), pid
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -174,7 +174,7 @@ def test_every_plan_validates_and_infeasible_only_without_roadmap_path(planner, 
         assert not connected
         return
     assert connected
-    check = validate_path(paper_roadmap.geometry, plan.rho, plan.start.pose, plan.goal.pose)
+    check = validate_path(paper_roadmap.mechanism, plan.joints, plan.start.pose, plan.goal.pose)
     assert check.ok, check.reason
     assert np.all(np.sign(singularity_margin(plan.poses)) == check.aspect)
 
@@ -194,12 +194,12 @@ def test_time_parameterize_rejects_bad_limits():
 
 
 def test_planner_works_on_another_rho1():
-    roadmap = build_roadmap(grid=Grid(rho1=13, step=0.25))
+    roadmap = build_roadmap(PAPER_GEOMETRY, rho1_slice(rho1=13, step=0.25))
     planner = Planner(roadmap)
     seg = roadmap.segmentation
     big = max(seg.patches.values(), key=lambda p: p.cells.size)
     deep = np.flatnonzero(planner.local.clearance(big.id) >= 4)
     ends = [(big.cells[k], big.slots[k]) for k in (deep[0], deep[-1])]
-    a, b = ((*roadmap.grid.rho_of(c), float(seg.field.poses[c, s, 2])) for c, s in ends)
+    a, b = ((*roadmap.grid.joints_of(c), float(seg.field.poses[c, s, 2])) for c, s in ends)
     plan = planner.plan(a, b)
     assert plan.validation.ok and set(plan.patches.tolist()) == {big.id}

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from rpr3_gwr_core.exceptions import InvalidInputError
-from rpr3_gwr_core.export import (roadmap_from_json, roadmap_summary, roadmap_to_gexf,
+from rpr3_gwr_core.io.export import (roadmap_from_json, roadmap_summary, roadmap_to_gexf,
                                   roadmap_to_json)
-from rpr3_gwr_core.field import Grid
-from rpr3_gwr_core.geometry import PAPER_GEOMETRY
-from rpr3_gwr_core.roadmap import aspect_groups, build_roadmap
+from rpr3_gwr_core.paper import rho1_slice
+from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY
+from rpr3_gwr_core.workspace.roadmap import aspect_groups, build_roadmap
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +29,7 @@ def loaded(json_text):
 
 def test_build_roadmap_reports_progress_up_to_done():
     calls = []
-    build_roadmap(PAPER_GEOMETRY, Grid(step=1.0), progress=lambda s, f: calls.append((s, f)))
+    build_roadmap(PAPER_GEOMETRY, rho1_slice(step=1.0), progress=lambda s, f: calls.append((s, f)))
     fractions = [f for _, f in calls]
     assert fractions == sorted(fractions)
     assert calls[-1] == ("done", 1.0)
@@ -38,11 +38,11 @@ def test_build_roadmap_reports_progress_up_to_done():
 def test_roadmap_exposes_its_field_grid_and_geometry(paper_roadmap):
     assert paper_roadmap.field is paper_roadmap.segmentation.field
     assert paper_roadmap.grid.shape == (401, 401)
-    assert paper_roadmap.geometry == PAPER_GEOMETRY
+    assert paper_roadmap.mechanism == PAPER_GEOMETRY
 
 
 def test_roadmap_rds_method_builds_the_same_graph(coarse_paper_roadmap):
-    rds = build_roadmap(PAPER_GEOMETRY, Grid(step=0.5), method="rds")
+    rds = build_roadmap(PAPER_GEOMETRY, rho1_slice(step=0.5), method="rds")
     assert set(rds.graph.nodes) == set(coarse_paper_roadmap.graph.nodes)
     assert set(map(frozenset, rds.graph.edges)) == set(map(frozenset, coarse_paper_roadmap.graph.edges))
 
@@ -57,7 +57,7 @@ def test_aspect_groups_are_sorted_lists_ordered_by_smallest_id():
 
 def test_summary_lists_regions_patches_and_gates(paper_roadmap):
     summary = roadmap_summary(paper_roadmap)
-    assert summary["format"] == "rpr3-gwr-roadmap" and summary["version"] == 1
+    assert summary["format"] == "rpr3-gwr-roadmap" and summary["version"] == 2
     assert [r["id"] for r in summary["regions"]] == list(range(1, 8))
     assert [r["n_solutions"] for r in summary["regions"] if r["id"] in (1, 4, 5)] == [2, 2, 6]
     assert len(summary["patches"]) == 24
@@ -75,7 +75,7 @@ def test_summary_is_plain_json(paper_roadmap):
 
 def test_json_round_trip_keeps_the_field_arrays(paper_roadmap, loaded):
     old, new = paper_roadmap.field, loaded.field
-    assert new.geometry == old.geometry and new.grid == old.grid
+    assert new.mechanism == old.mechanism and new.grid == old.grid
     np.testing.assert_array_equal(new.count, old.count)
     np.testing.assert_array_equal(new.poses, old.poses)  # NaN == NaN here
     np.testing.assert_array_equal(new.margin, old.margin)
@@ -140,7 +140,7 @@ def test_from_json_rejects_garbage(text):
 
 
 def test_from_json_rejects_an_unknown_version(coarse_document):
-    document = dict(coarse_document, version=2)
+    document = dict(coarse_document, version=3)
     with pytest.raises(InvalidInputError):
         roadmap_from_json(json.dumps(document))
 
@@ -150,7 +150,7 @@ def test_from_json_rejects_a_document_without_field(coarse_paper_roadmap):
         roadmap_from_json(roadmap_to_json(coarse_paper_roadmap, include_field=False))
 
 
-@pytest.mark.parametrize("key", ["format", "version", "geometry", "grid", "patches", "gates",
+@pytest.mark.parametrize("key", ["format", "version", "mechanism", "grid", "patches", "gates",
                                  "field"])
 def test_from_json_rejects_a_missing_key(coarse_document, key):
     document = {k: v for k, v in coarse_document.items() if k != key}
@@ -174,9 +174,9 @@ def test_from_json_rejects_a_wrong_size_or_type_array(coarse_document, value):
         roadmap_from_json(json.dumps(document))
 
 
-@pytest.mark.parametrize("section, value", [("geometry", {"a1": [0, 0]}), ("geometry", [1, 2]),
-                                            ("grid", {"rho1": -1.0, "rho2_range": [0, 50],
-                                                      "rho3_range": [0, 50], "step": 0.5}),
+@pytest.mark.parametrize("section, value", [("mechanism", {"kind": "3-RPR", "a1": [0, 0]}),
+                                            ("mechanism", [1, 2]),
+                                            ("grid", {"axes": [], "fixed": []}),
                                             ("patches", [{"id": 11}]), ("patches", None),
                                             ("gates", [{"patches": [11]}])])
 def test_from_json_rejects_malformed_sections(coarse_document, section, value):
@@ -186,7 +186,8 @@ def test_from_json_rejects_malformed_sections(coarse_document, section, value):
 
 
 def test_from_json_rejects_a_field_of_another_grid(coarse_document):
-    document = dict(coarse_document, grid=dict(coarse_document["grid"], step=0.25))
+    axes = [dict(axis, step=0.25) for axis in coarse_document["grid"]["axes"]]
+    document = dict(coarse_document, grid=dict(coarse_document["grid"], axes=axes))
     with pytest.raises(InvalidInputError):
         roadmap_from_json(json.dumps(document))
 

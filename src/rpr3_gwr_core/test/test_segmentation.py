@@ -8,11 +8,12 @@ import numpy as np
 import pytest
 
 from gwr_cases import OTHER_GEOMETRY, nearest_slot
-from rpr3_gwr_core.continuity import match_solutions, neighbour_pairs
-from rpr3_gwr_core.field import Grid, compute_field
-from rpr3_gwr_core.geometry import PAPER_GEOMETRY
-from rpr3_gwr_core.roadmap import aspect_groups, build_roadmap, roadmap_graph
-from rpr3_gwr_core.segmentation import segment
+from rpr3_gwr_core.workspace.continuity import match_solutions, neighbour_pairs
+from rpr3_gwr_core.paper import rho1_slice
+from rpr3_gwr_core.workspace import compute_field
+from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY
+from rpr3_gwr_core.workspace.roadmap import aspect_groups, build_roadmap, roadmap_graph
+from rpr3_gwr_core.workspace.segmentation import segment
 
 STRUCTURAL_CASES = ["paper", "paper_rho17_step0.25", "paper_rho13_step0.25",
                     "paper_rho30_step0.25", "other_rho10.1_step0.25"]
@@ -34,7 +35,7 @@ def paper(paper_roadmap):
 
 
 def _patch_of(roadmap, rho2, rho3, alpha_deg):
-    cell = roadmap.grid.cell_of(rho2, rho3)
+    cell = roadmap.grid.cell_of((roadmap.grid.fixed_value(0), rho2, rho3))
     slot = nearest_slot(roadmap.field, cell, math.radians(alpha_deg))
     return int(roadmap.segmentation.patch[cell, slot])
 
@@ -65,7 +66,7 @@ def test_regions_are_numbered_by_decreasing_area(paper):
 
 @pytest.mark.parametrize("rho2, rho3, region", [(12.0, 18.0, 6), (10.0, 25.0, 1), (20.0, 25.0, 3)])
 def test_paper_example_lies_in_the_papers_region(paper_roadmap, rho2, rho3, region):
-    cell = paper_roadmap.grid.cell_of(rho2, rho3)
+    cell = paper_roadmap.grid.cell_of((17.0, rho2, rho3))
     assert paper_roadmap.segmentation.region[cell] == region
 
 
@@ -124,7 +125,7 @@ def test_rho1_13_coarse_roadmap_has_two_aspect_groups(cases):
 def test_rho1_30_roadmap_has_two_aspect_groups():
     # Paper figure 10 (rho1 = 30); at step 0.25 a narrow region splits and
     # leaves isolated patches, so this one needs the paper's resolution.
-    roadmap = build_roadmap(PAPER_GEOMETRY, Grid(rho1=30.0))
+    roadmap = build_roadmap(PAPER_GEOMETRY, rho1_slice(rho1=30.0))
     assert len(aspect_groups(roadmap.graph)) == 2
 
 
@@ -326,7 +327,7 @@ def test_small_connected_sets_become_singular_locus(cases):
 # --- known bugs: continuation across a singularity ----------------------------------------------
 
 def _two_cell_field(rho1, rho2_range, rho3_range, step):
-    grid = Grid(rho1=rho1, rho2_range=rho2_range, rho3_range=rho3_range, step=step)
+    grid = rho1_slice(rho1=rho1, rho2_range=rho2_range, rho3_range=rho3_range, step=step)
     assert grid.size == 2
     return compute_field(OTHER_GEOMETRY, grid)
 
@@ -343,13 +344,13 @@ def test_continuation_never_links_opposite_aspects(rho1, rho2_range, rho3_range,
 
 
 def test_other_geometry_rho1_7_7_gates_keep_aspects():
-    grid = Grid(rho1=7.7, rho2_range=(0.0, 30.0), rho3_range=(0.0, 30.0), step=0.25)
+    grid = rho1_slice(rho1=7.7, rho2_range=(0.0, 30.0), rho3_range=(0.0, 30.0), step=0.25)
     seg = segment(compute_field(OTHER_GEOMETRY, grid))
     assert all(seg.patches[a].aspect == seg.patches[b].aspect for a, b in seg.gates)
     assert len(aspect_groups(roadmap_graph(seg))) == 2
 
 
 def test_other_geometry_rho1_10_segments_without_error():
-    grid = Grid(rho1=10.0, rho2_range=(0.0, 30.0), rho3_range=(0.0, 30.0), step=0.5)
+    grid = rho1_slice(rho1=10.0, rho2_range=(0.0, 30.0), rho3_range=(0.0, 30.0), step=0.5)
     seg = segment(compute_field(OTHER_GEOMETRY, grid))
     assert seg.n_regions > 1

@@ -15,11 +15,11 @@ from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
 from rpr3_gwr_core.exceptions import (AssemblyModeError, InfeasiblePathError, InvalidInputError,
                                       OutOfGridError)
-from rpr3_gwr_core.geometry import PAPER_GEOMETRY
-from rpr3_gwr_core.kinematics import singularity_margin
-from rpr3_gwr_core.planner import PlanOptions, Planner
-from rpr3_gwr_core.trajectory import time_parameterize
-from rpr3_gwr_core.validation import DEFAULT_MIN_MARGIN, validate_path
+from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY
+from rpr3_gwr_core.mechanisms.rpr3 import singularity_margin
+from rpr3_gwr_core.planning.planner import PlanOptions, Planner
+from rpr3_gwr_core.planning.trajectory import time_parameterize
+from rpr3_gwr_core.planning.validation import DEFAULT_MIN_MARGIN, validate_path
 
 D = math.radians
 RHO1 = 17.0
@@ -63,7 +63,7 @@ def torus_configuration(theta1, alpha, geometry=PAPER_GEOMETRY):
 def test_reported_valid_configurations_plan(planner, paper_roadmap, start, goal):
     plan = planner.plan(start, goal)
     assert plan.validation.ok, plan.validation.reason
-    check = validate_path(paper_roadmap.geometry, plan.rho, plan.start.pose, plan.goal.pose)
+    check = validate_path(paper_roadmap.mechanism, plan.joints, plan.start.pose, plan.goal.pose)
     assert check.ok and check.min_margin >= DEFAULT_MIN_MARGIN
 
 
@@ -86,9 +86,9 @@ def test_torus_configurations_of_one_aspect_always_plan(planner, paper_roadmap, 
     goal, goal_aspect = _valid_torus_configuration(theta_goal, alpha_goal)
     assume(start_aspect == goal_aspect)
     plan = planner.plan(start, goal)
-    check = validate_path(paper_roadmap.geometry, plan.rho, plan.start.pose, plan.goal.pose)
+    check = validate_path(paper_roadmap.mechanism, plan.joints, plan.start.pose, plan.goal.pose)
     assert check.ok, check.reason
-    np.testing.assert_allclose(plan.rho[[0, -1]], [start[:3], goal[:3]])
+    np.testing.assert_allclose(plan.joints[[0, -1]], [start[:3], goal[:3]])
 
 
 # --- hostile values ----------------------------------------------------------------------------
@@ -112,7 +112,7 @@ def test_one_limit_alone_asks_for_both():
 
 @pytest.mark.parametrize("limit", [5e-324, 1e-300, 1e-12, 1e100, 1e308])
 def test_limits_that_cannot_time_the_path_are_refused_or_give_a_sound_profile(planner, limit):
-    rho = planner.plan(Q1, Q2).rho
+    rho = planner.plan(Q1, Q2).joints
     try:
         times, velocities, accelerations = time_parameterize(rho, limit, limit)
     except InvalidInputError:

@@ -2,29 +2,29 @@
 
 Large per-cell arrays travel as ``array.array`` built from numpy buffers, the
 fast path of the generated setters (a list would be checked element by
-element), and come back with ``numpy.frombuffer``.
+element), and come back with ``numpy.frombuffer``.  A roadmap travels as its
+field's arrays; patches and gates are derived from them on arrival by the
+core's one decoder (``Segmentation.from_arrays``), and the roadmap message's
+summary must agree.
 """
 
 import array
 
 import numpy as np
 from builtin_interfaces.msg import Duration
-from rpr3_gwr_core.continuity import neighbour_pairs
 from rpr3_gwr_core.exceptions import InvalidInputError
-from rpr3_gwr_core.field import Grid, NSolutionField
-from rpr3_gwr_core.geometry import Geometry
-from rpr3_gwr_core.kinematics import MAX_SOLUTIONS
-from rpr3_gwr_core.roadmap import Roadmap, roadmap_graph
-from rpr3_gwr_core.segmentation import Gate, Patch, Segmentation
-from rpr3_gwr_msgs.msg import Geometry as GeometryMsg
+from rpr3_gwr_core.mechanisms import Geometry
+from rpr3_gwr_core.workspace import (Axis, Grid, NSolutionField, Roadmap, Segmentation,
+                                     roadmap_graph)
+from rpr3_gwr_msgs.msg import AxisLinks, FixedJoint, GridAxis
 from rpr3_gwr_msgs.msg import Gate as GateMsg
+from rpr3_gwr_msgs.msg import Geometry as GeometryMsg
 from rpr3_gwr_msgs.msg import Grid as GridMsg
 from rpr3_gwr_msgs.msg import NSolutionField as NSolutionFieldMsg
 from rpr3_gwr_msgs.msg import WorkspacePatch, WorkspaceRoadmap
 
 __all__ = ["MAX_DURATION", "duration_msg", "geometry_to_msg", "geometry_from_msg",
            "grid_to_msg", "grid_from_msg", "roadmap_to_msgs", "roadmap_from_msgs"]
-
 
 # builtin_interfaces/Duration holds int32 seconds.
 MAX_DURATION = 2**31 - 1
@@ -70,18 +70,18 @@ def geometry_from_msg(msg):
 
 
 def grid_to_msg(grid):
-    n2, n3 = grid.shape
-    return GridMsg(rho1=grid.rho1, rho2_min=grid.rho2_range[0], rho2_max=grid.rho2_range[1],
-                   rho3_min=grid.rho3_range[0], rho3_max=grid.rho3_range[1], step=grid.step,
-                   rho2_count=n2, rho3_count=n3)
+    return GridMsg(axes=[GridAxis(joint=a.joint, min=a.low, max=a.high, step=a.step,
+                                  count=a.count) for a in grid.axes],
+                   fixed=[FixedJoint(joint=j, value=v) for j, v in grid.fixed])
 
 
 def grid_from_msg(msg):
-    grid = Grid(rho1=msg.rho1, rho2_range=(msg.rho2_min, msg.rho2_max),
-                rho3_range=(msg.rho3_min, msg.rho3_max), step=msg.step)
-    if grid.shape != (msg.rho2_count, msg.rho3_count):
-        raise InvalidInputError(f"grid message: counts {(msg.rho2_count, msg.rho3_count)} do not "
-                                f"match its ranges and step {grid.shape}")
+    grid = Grid(axes=tuple(Axis(a.joint, a.min, a.max, a.step) for a in msg.axes),
+                fixed=tuple((f.joint, f.value) for f in msg.fixed))
+    counts = tuple(a.count for a in msg.axes)
+    if grid.shape != counts:
+        raise InvalidInputError(f"grid message: counts {counts} do not match its ranges and "
+                                f"steps {grid.shape}")
     return grid
 
 
@@ -90,7 +90,7 @@ def roadmap_to_msgs(roadmap, header):
 
     Parameters
     ----------
-    roadmap : rpr3_gwr_core.roadmap.Roadmap
+    roadmap : rpr3_gwr_core.workspace.Roadmap
     header : std_msgs.msg.Header
 
     Returns
@@ -99,26 +99,21 @@ def roadmap_to_msgs(roadmap, header):
     """
     seg = roadmap.segmentation
     field = seg.field
-    geometry, grid = geometry_to_msg(field.geometry), grid_to_msg(field.grid)
-    field_msg = NSolutionFieldMsg(header=header, geometry=geometry, grid=grid)
+    geometry, grid = geometry_to_msg(field.mechanism), grid_to_msg(field.grid)
+    field_msg = NSolutionFieldMsg(header=header, geometry=geometry, grid=grid,
+                                  max_solutions=field.max_solutions,
+                                  pose_size=field.mechanism.pose_size)
     field_msg.n_solutions = _pack("B", field.count, np.uint8)
     field_msg.region_ids = _pack("i", seg.region, np.int32)
     field_msg.patch_ids = _pack("i", seg.patch, np.int32)
-    field_msg.x = _pack("f", field.poses[..., 0], np.float32)
-    field_msg.y = _pack("f", field.poses[..., 1], np.float32)
-    field_msg.alpha = _pack("f", field.poses[..., 2], np.float32)
-    field_msg.singularity_margin = _pack("f", field.margin, np.float32)
-    field_msg.links_rho2 = _pack("b", seg.links[0][2], np.int8)
-    field_msg.links_rho3 = _pack("b", seg.links[1][2], np.int8)
-    cell_area = field.grid.step ** 2
+    field_msg.poses = _pack("d", field.poses, np.float64)
+    field_msg.singularity_margin = _pack("d", field.margin, np.float64)
+    field_msg.links = [AxisLinks(slots=_pack("b", match, np.int8)) for _, _, match in seg.links]
     patches = [WorkspacePatch(id=p.id, region=p.region, layer=p.layer, aspect=p.aspect,
-                              n_solutions=p.n_solutions, cells=_pack("I", p.cells, np.uint32),
-                              gate_cells=_pack("I", p.gate_cells, np.uint32),
-                              singular_cells=_pack("I", p.singular_cells, np.uint32),
-                              area=float(p.cells.size * cell_area))
+                              n_solutions=p.n_solutions, n_cells=int(p.cells.size),
+                              area=roadmap.graph.nodes[p.id]["area"])
                for _, p in sorted(seg.patches.items())]
-    gates = [GateMsg(patch_a=a, patch_b=b, cells_a=_pack("I", g.faces[:, 0], np.uint32),
-                     cells_b=_pack("I", g.faces[:, 1], np.uint32), width=g.width)
+    gates = [GateMsg(patch_a=a, patch_b=b, n_faces=len(g.faces), width=g.width)
              for (a, b), g in sorted(seg.gates.items())]
     roadmap_msg = WorkspaceRoadmap(header=header, geometry=geometry, grid=grid, patches=patches,
                                    gates=gates)
@@ -138,44 +133,26 @@ def roadmap_from_msgs(field_msg, roadmap_msg):
     if (geometry_from_msg(roadmap_msg.geometry) != geometry
             or grid_from_msg(roadmap_msg.grid) != grid):
         raise InvalidInputError("field and roadmap messages were built for different grids")
+    slots, size = geometry.max_solutions, geometry.pose_size
+    if (field_msg.max_solutions, field_msg.pose_size) != (slots, size):
+        raise InvalidInputError(f"field message: {field_msg.max_solutions} solutions of "
+                                f"{field_msg.pose_size} coordinates, the mechanism has "
+                                f"{slots} of {size}")
     n = grid.size
-    per_solution = n * MAX_SOLUTIONS
-    count = _unpack(field_msg.n_solutions, np.uint8, n, "n_solutions").copy()
-    poses = np.stack([_unpack(getattr(field_msg, k), np.float32, per_solution, k).astype(float)
-                      for k in ("x", "y", "alpha")], axis=-1).reshape(n, MAX_SOLUTIONS, 3)
-    margin = _unpack(field_msg.singularity_margin, np.float32, per_solution,
-                     "singularity_margin").astype(float).reshape(n, MAX_SOLUTIONS)
-    field = NSolutionField(geometry=geometry, grid=grid, count=count, poses=poses, margin=margin)
-    region = _unpack(field_msg.region_ids, np.int32, n, "region_ids").copy()
-    patch = _unpack(field_msg.patch_ids, np.int32, per_solution, "patch_ids").reshape(
-        n, MAX_SOLUTIONS).copy()
-    links = []
-    for (lower, upper), values, name in zip(neighbour_pairs(grid.shape),
-                                            (field_msg.links_rho2, field_msg.links_rho3),
-                                            ("links_rho2", "links_rho3")):
-        match = _unpack(values, np.int8, lower.size * MAX_SOLUTIONS, name)
-        links.append((lower, upper, match.reshape(lower.size, MAX_SOLUTIONS).copy()))
-    patches = {}
-    cells_all, slots_all = np.nonzero(patch)
-    order = np.argsort(patch[cells_all, slots_all], kind="stable")
-    ids = patch[cells_all, slots_all][order]
-    for entry in roadmap_msg.patches:
-        lo, hi = np.searchsorted(ids, [entry.id, entry.id + 1])
-        cells, slots = cells_all[order[lo:hi]], slots_all[order[lo:hi]]
-        if cells.size != len(entry.cells):
-            raise InvalidInputError(f"patch {entry.id}: {len(entry.cells)} cells in the roadmap, "
-                                    f"{cells.size} in the field")
-        patches[entry.id] = Patch(
-            id=entry.id, region=entry.region, layer=entry.layer, aspect=entry.aspect,
-            n_solutions=entry.n_solutions, cells=cells, slots=slots,
-            gate_cells=np.frombuffer(entry.gate_cells, np.uint32).astype(np.int64),
-            singular_cells=np.frombuffer(entry.singular_cells, np.uint32).astype(np.int64))
-    gates = {}
-    for entry in roadmap_msg.gates:
-        faces = np.stack([np.frombuffer(entry.cells_a, np.uint32),
-                          np.frombuffer(entry.cells_b, np.uint32)], axis=-1).astype(np.int64)
-        gates[(entry.patch_a, entry.patch_b)] = Gate(
-            patches=(entry.patch_a, entry.patch_b), faces=faces.reshape(-1, 2), width=entry.width)
-    segmentation = Segmentation(field=field, region=region, patch=patch, patches=patches,
-                                gates=gates, links=links)
+    field = NSolutionField(
+        mechanism=geometry, grid=grid,
+        count=_unpack(field_msg.n_solutions, np.uint8, n, "n_solutions").copy(),
+        poses=_unpack(field_msg.poses, np.float64, n * slots * size, "poses").reshape(
+            n, slots, size).copy(),
+        margin=_unpack(field_msg.singularity_margin, np.float64, n * slots,
+                       "singularity_margin").reshape(n, slots).copy())
+    links = [np.frombuffer(axis.slots, np.int8).reshape(-1, slots) if len(axis.slots)
+             else np.zeros((0, slots), np.int8) for axis in field_msg.links]
+    segmentation = Segmentation.from_arrays(
+        field, _unpack(field_msg.region_ids, np.int32, n, "region_ids"),
+        _unpack(field_msg.patch_ids, np.int32, n * slots, "patch_ids").reshape(n, slots),
+        links)
+    if ({p.id for p in roadmap_msg.patches} != set(segmentation.patches)
+            or {(g.patch_a, g.patch_b) for g in roadmap_msg.gates} != set(segmentation.gates)):
+        raise InvalidInputError("the roadmap message's patches and gates do not match its field")
     return Roadmap(segmentation=segmentation, graph=roadmap_graph(segmentation), timings={})

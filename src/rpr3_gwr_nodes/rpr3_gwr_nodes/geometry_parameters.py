@@ -3,7 +3,7 @@ by every node that needs it (the builder and the driver), so one launch
 configuration describes one mechanism."""
 
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
-from rpr3_gwr_core.geometry import PAPER_GEOMETRY, Geometry
+from rpr3_gwr_core.mechanisms import PAPER_GEOMETRY, Geometry
 
 __all__ = ["declare_geometry"]
 

@@ -26,28 +26,33 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallb
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rpr3_gwr_core.exceptions import GWRError, InvalidInputError
-from rpr3_gwr_core.planner import PlanOptions, Planner
+from rpr3_gwr_core.planning import PlanOptions, Planner
 from rpr3_gwr_msgs.msg import GlobalPath, NSolutionField, PlatformPose, WorkspaceRoadmap
 from rpr3_gwr_msgs.srv import PlanPath
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from .conversions import MAX_DURATION, duration_msg, roadmap_from_msgs
+from .profiles import BASE_FRAME, JOINT_NAMES, LATCHED_QOS
 from .spin import run
-from .roadmap_builder import LATCHED_QOS
 
-__all__ = ["PlannerNode", "ERROR_CODES", "JOINT_NAMES", "plan_to_trajectory", "main"]
+__all__ = ["PlannerNode", "ERROR_CODES", "FEASIBILITY", "plan_to_trajectory", "main"]
 
-JOINT_NAMES = ["rho1", "rho2", "rho3"]
 ERROR_CODES = {
     "INVALID_INPUT": PlanPath.Response.ERROR_INVALID_INPUT,
     "OUT_OF_GRID": PlanPath.Response.ERROR_OUT_OF_GRID,
-    "RHO1_MISMATCH": PlanPath.Response.ERROR_RHO1_MISMATCH,
+    "FIXED_JOINT_MISMATCH": PlanPath.Response.ERROR_RHO1_MISMATCH,
     "NO_SOLUTION": PlanPath.Response.ERROR_NO_SOLUTION,
     "NO_ASSEMBLY_MODE": PlanPath.Response.ERROR_NO_ASSEMBLY_MODE,
     "SINGULAR": PlanPath.Response.ERROR_SINGULAR,
     "INFEASIBLE": PlanPath.Response.ERROR_INFEASIBLE,
     "VALIDATION_FAILED": PlanPath.Response.ERROR_VALIDATION_FAILED,
+}
+FEASIBILITY = {
+    "same_patch": PlanPath.Response.FEASIBILITY_SAME_PATCH,
+    "connected": PlanPath.Response.FEASIBILITY_CONNECTED,
+    "other_aspect": PlanPath.Response.FEASIBILITY_OTHER_ASPECT,
+    "unreachable": PlanPath.Response.FEASIBILITY_UNREACHABLE,
 }
 
 
@@ -70,9 +75,9 @@ def plan_to_trajectory(plan, header):
         raise InvalidInputError("the limits are so high that two waypoints are less than 1 ns "
                                 "apart, so time stamps would not increase: lower them")
     trajectory = JointTrajectory(header=header, joint_names=list(JOINT_NAMES))
-    for k, rho in enumerate(plan.rho):
+    for k, joints in enumerate(plan.joints):
         trajectory.points.append(JointTrajectoryPoint(
-            positions=[float(v) for v in rho],
+            positions=[float(v) for v in joints],
             velocities=[float(v) for v in plan.velocities[k]],
             accelerations=[float(v) for v in plan.accelerations[k]],
             time_from_start=duration_msg(float(times[k]))))
@@ -140,11 +145,10 @@ class PlannerNode(Node):
         # request keeps the state it started with.
         self._state = _State(planner, roadmap.header.stamp)
         self._messages.clear()
-        grid = planner.roadmap.grid
         stamp = roadmap.header.stamp
         self.get_logger().info(
             f"planning on a new roadmap (stamp {stamp.sec}.{stamp.nanosec:09d}): "
-            f"rho1 = {grid.rho1:g}, {len(planner.roadmap.graph)} patches, ready in "
+            f"rho1 = {_rho1(planner):g}, {len(planner.roadmap.graph)} patches, ready in "
             f"{time.perf_counter() - start:.3f} s")
         self.ready.set()
 
@@ -159,7 +163,7 @@ class PlannerNode(Node):
         tolerance = request.alpha_tolerance or math.radians(1.0)
         return PlanOptions(smooth=request.smooth, weighted=request.weighted,
                            feasibility_only=request.feasibility_only, max_velocity=limits[0],
-                           max_acceleration=limits[1], alpha_tol=tolerance)
+                           max_acceleration=limits[1], mode_tol=tolerance)
 
     def _on_plan(self, request, response):
         state = self._state
@@ -170,7 +174,9 @@ class PlannerNode(Node):
             return self._answer(request, state)
         except GWRError as exc:
             code = ERROR_CODES.get(exc.code, PlanPath.Response.ERROR_INTERNAL)
-            return _error(_named(state), code, str(exc), getattr(exc, "reason", ""))
+            return _error(_named(state), code, str(exc),
+                          FEASIBILITY.get(getattr(exc, "reason", None),
+                                          PlanPath.Response.FEASIBILITY_UNKNOWN))
         except Exception as exc:  # a bug must not take the service down
             self.get_logger().error(f"internal error on a plan request: {exc!r}")
             return _error(_named(state), PlanPath.Response.ERROR_INTERNAL,
@@ -182,7 +188,7 @@ class PlannerNode(Node):
         goal = (request.goal.rho1, request.goal.rho2, request.goal.rho3, request.goal.alpha)
         plan = state.planner.plan(start, goal, options)
         response = _named(state)
-        response.feasibility = plan.reason
+        response.feasibility = FEASIBILITY[plan.reason]
         response.global_paths = [GlobalPath(patch_ids=list(g.patches), cost=g.cost)
                                  for g in plan.global_paths]
         if not options.feasibility_only:
@@ -198,7 +204,7 @@ class PlannerNode(Node):
         return response
 
     def _header(self):
-        return Header(stamp=self.get_clock().now().to_msg(), frame_id="rpr3_base")
+        return Header(stamp=self.get_clock().now().to_msg(), frame_id=BASE_FRAME)
 
 
 def _named(state):
@@ -206,11 +212,16 @@ def _named(state):
     response = PlanPath.Response()
     if state is not None:
         response.roadmap_stamp = state.stamp
-        response.roadmap_rho1 = state.planner.roadmap.grid.rho1
+        response.roadmap_rho1 = _rho1(state.planner)
     return response
 
 
-def _error(response, code, message, feasibility=""):
+def _rho1(planner):
+    """The roadmap's fixed rho1 (joint 0 of the 3-RPR)."""
+    return planner.roadmap.grid.fixed_value(0)
+
+
+def _error(response, code, message, feasibility=PlanPath.Response.FEASIBILITY_UNKNOWN):
     response.success = False
     response.error_code = code
     response.error_msg = message

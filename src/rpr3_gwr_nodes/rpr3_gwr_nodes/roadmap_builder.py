@@ -25,23 +25,19 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rpr3_gwr_core.exceptions import GWRError
-from rpr3_gwr_core.field import Grid
-from rpr3_gwr_core.kinematics import direct_kinematics_batch
-from rpr3_gwr_core.roadmap import build_roadmap
+from rpr3_gwr_core.paper import rho1_slice
+from rpr3_gwr_core.workspace import build_roadmap
 from rpr3_gwr_msgs.msg import NSolutionField, WorkspaceRoadmap
 from std_msgs.msg import Header
 
 from .conversions import roadmap_to_msgs
 from .geometry_parameters import declare_geometry
+from .profiles import BASE_FRAME, LATCHED_QOS
 from .spin import run
 
-__all__ = ["RoadmapBuilder", "LATCHED_QOS", "main"]
+__all__ = ["RoadmapBuilder", "main"]
 
-LATCHED_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
-                         reliability=ReliabilityPolicy.RELIABLE,
-                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
 _GRID_PARAMETERS = ("rho1", "rho2_range", "rho3_range", "step")
 # Largest grid the builder accepts: about 4 million cells (2001 x 2001).
 _MAX_CELLS = 4_000_000
@@ -85,8 +81,8 @@ class RoadmapBuilder(Node):
     def _grid(self, overrides=None):
         values = {name: self.get_parameter(name).value for name in _GRID_PARAMETERS}
         values.update(overrides or {})
-        return Grid(rho1=values["rho1"], rho2_range=tuple(values["rho2_range"]),
-                    rho3_range=tuple(values["rho3_range"]), step=values["step"])
+        return rho1_slice(values["rho1"], tuple(values["rho2_range"]),
+                          tuple(values["rho3_range"]), values["step"])
 
     def _check_parameters(self, parameters):
         overrides = {p.name: p.value for p in parameters if p.name in _GRID_PARAMETERS}
@@ -107,15 +103,15 @@ class RoadmapBuilder(Node):
         if solvable < _MIN_REGION_CELLS:
             return SetParametersResult(successful=False, reason=(
                 f"about {solvable:.0f} cells of the grid have a direct-kinematic solution at "
-                f"rho1 = {grid.rho1:g}, fewer than one region needs ({_MIN_REGION_CELLS}): "
-                "its roadmap would be empty"))
+                f"rho1 = {grid.fixed_value(0):g}, fewer than one region needs "
+                f"({_MIN_REGION_CELLS}): its roadmap would be empty"))
         return SetParametersResult(successful=True)
 
     def _cells_with_solutions(self, grid):
         """Estimate of the cells of ``grid`` with a solution, from ``_PROBE_CELLS``
         cells spread over it."""
         probe = np.unique(np.linspace(0, grid.size - 1, _PROBE_CELLS).astype(int))
-        count, _ = direct_kinematics_batch(grid.rho()[probe], self.geometry)
+        count, _ = self.geometry.solve(grid.joints()[probe])
         return np.count_nonzero(count) * grid.size / probe.size
 
     def _parameters_set(self, parameters):
@@ -126,7 +122,8 @@ class RoadmapBuilder(Node):
     def _build(self):
         grid = self._grid()
         n2, n3 = grid.shape
-        self.get_logger().info(f"building the roadmap: rho1 = {grid.rho1:g}, {n2} x {n3} cells")
+        self.get_logger().info(f"building the roadmap: rho1 = {grid.fixed_value(0):g}, "
+                               f"{n2} x {n3} cells")
         start = time.perf_counter()
 
         def progress(stage, fraction):
@@ -140,11 +137,11 @@ class RoadmapBuilder(Node):
             return
         seg = roadmap.segmentation
         if not seg.patches:
-            self.get_logger().error(f"the roadmap at rho1 = {grid.rho1:g} has no patch")
+            self.get_logger().error(f"the roadmap at rho1 = {grid.fixed_value(0):g} has no patch")
             self._keep_last_good(grid)
             return
         self.roadmap = roadmap
-        header = Header(stamp=self.get_clock().now().to_msg(), frame_id="rpr3_base")
+        header = Header(stamp=self.get_clock().now().to_msg(), frame_id=BASE_FRAME)
         field_msg, roadmap_msg = roadmap_to_msgs(roadmap, header)
         self.field_pub.publish(field_msg)
         self.roadmap_pub.publish(roadmap_msg)
@@ -158,13 +155,14 @@ class RoadmapBuilder(Node):
             self.get_logger().error("no roadmap is published")
             return
         good = self.roadmap.grid
-        self.get_logger().error(f"the roadmap for rho1 = {good.rho1:g} stays published; the "
-                                "grid parameters go back to its grid")
+        rho2, rho3 = good.axes
+        self.get_logger().error(f"the roadmap for rho1 = {good.fixed_value(0):g} stays "
+                                "published; the grid parameters go back to its grid")
         self.set_parameters_atomically([
-            Parameter("rho1", value=good.rho1),
-            Parameter("rho2_range", value=list(good.rho2_range)),
-            Parameter("rho3_range", value=list(good.rho3_range)),
-            Parameter("step", value=good.step)])
+            Parameter("rho1", value=good.fixed_value(0)),
+            Parameter("rho2_range", value=[rho2.low, rho2.high]),
+            Parameter("rho3_range", value=[rho3.low, rho3.high]),
+            Parameter("step", value=rho2.step)])
 
 
 def main(args=None):

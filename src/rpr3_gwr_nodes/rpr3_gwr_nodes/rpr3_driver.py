@@ -40,10 +40,8 @@ from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import qos_profile_sensor_data
-from rpr3_gwr_core.kinematics import direct_kinematics, passive_angles, singularity_margin
-from rpr3_gwr_core.mechanism import Mechanism
-from rpr3_gwr_core.validation import DEFAULT_MAX_STEP
+from rpr3_gwr_core.mechanisms.rpr3 import direct_kinematics, passive_angles, singularity_margin
+from rpr3_gwr_core.planning import DEFAULT_MAX_STEP
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import PlatformPose
 from rpr3_gwr_msgs.srv import ResetDriver
@@ -51,7 +49,7 @@ from sensor_msgs.msg import JointState
 
 from .conversions import duration_msg
 from .geometry_parameters import declare_geometry
-from .planner import JOINT_NAMES
+from .profiles import JOINT_NAMES, PASSIVE_JOINT_NAMES, SENSOR_QOS
 from .spin import run
 
 __all__ = ["Rpr3Driver", "main"]
@@ -113,7 +111,6 @@ class Rpr3Driver(Node):
                                    description="Initial (rho1, rho2, rho3 [length unit], "
                                                "alpha [rad])", read_only=True))
         self.geometry = declare_geometry(self)
-        self.mechanism = Mechanism(self.geometry)
         self.leg_limits = tuple(float(v) for v in self.get_parameter("leg_limits").value)
         self._lock = threading.Lock()
         self._active = False  # a goal is accepted or executing (under _lock)
@@ -122,9 +119,9 @@ class Rpr3Driver(Node):
         self.rho, self.pose, self.margin = self._assembly(
             self.get_parameter("initial_configuration").value)
         self.velocity = np.zeros(3)
-        self.joint_pub = self.create_publisher(JointState, "joint_states", qos_profile_sensor_data)
+        self.joint_pub = self.create_publisher(JointState, "joint_states", SENSOR_QOS)
         self.pose_pub = self.create_publisher(PlatformPose, "platform_pose",
-                                              qos_profile_sensor_data)
+                                              SENSOR_QOS)
         self.diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         timers = MutuallyExclusiveCallbackGroup()
         self.create_timer(1.0 / self.get_parameter("rate").value, self._publish_state,
@@ -181,7 +178,7 @@ class Rpr3Driver(Node):
             rho, pose, velocity = self.rho.copy(), self.pose.copy(), self.velocity.copy()
         msg = JointState()
         msg.header.stamp = self.get_clock().now().to_msg()
-        msg.name = list(JOINT_NAMES) + ["theta1", "theta2", "theta3"]
+        msg.name = JOINT_NAMES + PASSIVE_JOINT_NAMES
         msg.position = [float(v) for v in rho] + [
             float(v) for v in passive_angles(pose, self.geometry)]
         msg.velocity = [float(v) for v in velocity] + [math.nan] * 3
@@ -322,7 +319,7 @@ class Rpr3Driver(Node):
         while True:
             if goal_handle.is_cancel_requested:
                 goal_handle.canceled()
-                result.error_code, result.reason = _Result.CANCELED, "canceled"
+                result.error_code, result.error_msg = _Result.CANCELED, "canceled"
                 return self._finish(result, smallest)
             if self._stopping.is_set():
                 return self._abort(goal_handle, result, _Result.CANCELED,
@@ -376,7 +373,7 @@ class Rpr3Driver(Node):
         extreme = None
         for point in points:
             substeps = max(1, math.ceil(float(np.max(np.abs(point - rho))) / DEFAULT_MAX_STEP))
-            followed = self.mechanism.follow(pose, rho, point, substeps=substeps)
+            followed = self.geometry.follow(pose, rho, point, substeps=substeps)
             if followed is None:
                 return None
             pose, margin, step_extreme = followed
@@ -392,7 +389,7 @@ class Rpr3Driver(Node):
             with self._lock:
                 self._holding = f"holding after an abort: {reason}"
         goal_handle.abort()
-        result.error_code, result.reason = code, reason
+        result.error_code, result.error_msg = code, reason
         self._publish_diagnostics()
         return self._finish(result, smallest)
 

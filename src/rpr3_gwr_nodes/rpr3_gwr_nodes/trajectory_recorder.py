@@ -29,13 +29,13 @@ import time
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import qos_profile_sensor_data
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.rosbag2.storage_sqlite3 import Sqlite3Writer
 from rosbags.typesys import Stores, get_typestore
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
+from .profiles import SENSOR_QOS
 from .spin import run
 
 __all__ = ["TrajectoryRecorder", "main"]
@@ -68,8 +68,7 @@ class TrajectoryRecorder(Node):
         topics = {"planned_trajectory": (JointTrajectory, "trajectory_msgs/msg/JointTrajectory",
                                          10)}
         if self.get_parameter("record_joint_states").value:
-            topics["joint_states"] = (JointState, "sensor_msgs/msg/JointState",
-                                      qos_profile_sensor_data)
+            topics["joint_states"] = (JointState, "sensor_msgs/msg/JointState", SENSOR_QOS)
         self.counts = {topic: 0 for topic in topics}
         self._queue = queue.Queue()
         opened = threading.Event()

@@ -9,7 +9,8 @@ import numpy as np
 from matplotlib.figure import Figure
 from scipy.ndimage import distance_transform_cdt
 
-from .roadmap import aspect_groups
+from ..exceptions import InvalidInputError
+from ..workspace import aspect_groups
 
 __all__ = ["field_figure", "roadmap_figure", "plan_figure"]
 
@@ -31,29 +32,40 @@ def field_figure(roadmap):
     """
     seg = roadmap.segmentation
     grid = seg.field.grid
+    u, v, labels, fixed = _plane(roadmap)
     shape = grid.shape
     count = seg.field.count.reshape(shape).astype(float)
     region = seg.region.reshape(shape)
     count[region == 0] = np.nan
-    extent = (grid.rho2[0], grid.rho2[-1], grid.rho3[0], grid.rho3[-1])
     fig = Figure(figsize=(7, 6))
     ax = fig.add_subplot()
-    image = ax.imshow(count.T, origin="lower", extent=extent, cmap="viridis", vmin=0, vmax=6,
+    image = ax.imshow(count.T, origin="lower", extent=(u[0], u[-1], v[0], v[-1]),
+                      cmap="viridis", vmin=0, vmax=seg.field.max_solutions,
                       interpolation="nearest")
     edges = np.zeros(shape, dtype=bool)
     edges[:-1, :] |= region[:-1, :] != region[1:, :]
     edges[:, :-1] |= region[:, :-1] != region[:, 1:]
-    ax.contour(grid.rho2, grid.rho3, edges.T.astype(float), levels=[0.5], colors="k",
-               linewidths=0.6)
+    ax.contour(u, v, edges.T.astype(float), levels=[0.5], colors="k", linewidths=0.6)
     for r in range(1, seg.n_regions + 1):
         i, j = _interior_point(region == r)
-        ax.text(grid.rho2[i], grid.rho3[j], str(r), ha="center", va="center", fontsize=10,
+        ax.text(u[i], v[j], str(r), ha="center", va="center", fontsize=10,
                 bbox={"boxstyle": "circle", "fc": "white", "ec": "k"})
     fig.colorbar(image, ax=ax, label="number of solutions")
-    ax.set_xlabel(r"$\rho_2$")
-    ax.set_ylabel(r"$\rho_3$")
-    ax.set_title(rf"n-solution field and regions, $\rho_1$ = {grid.rho1:g}")
+    ax.set_xlabel(labels[0])
+    ax.set_ylabel(labels[1])
+    ax.set_title(f"n-solution field and regions{fixed}")
     return fig
+
+
+def _plane(roadmap):
+    """Axis values, axis labels and a title suffix naming the fixed joints
+    of a roadmap's 2-D grid."""
+    grid, names = roadmap.grid, roadmap.mechanism.joint_names
+    if grid.ndim != 2:
+        raise InvalidInputError(f"figures draw 2-D grids, this one has {grid.ndim} axes")
+    labels = [names[a.joint] for a in grid.axes]
+    fixed = ", ".join(f"{names[j]} = {value:g}" for j, value in grid.fixed)
+    return grid.axes[0].values, grid.axes[1].values, labels, f", {fixed}" if fixed else ""
 
 
 def _interior_point(mask):
@@ -91,21 +103,24 @@ def roadmap_figure(roadmap, seed=0):
         (graph.edges[f]["width"] for f in graph.edges), default=1.0)) for e in graph.edges]
     nx.draw_networkx(graph, pos=layout, ax=ax, node_color=colors, width=widths,
                      node_size=420, font_size=8, font_color="white")
-    ax.set_title(rf"global workspace roadmap, $\rho_1$ = {roadmap.grid.rho1:g} "
-                 "(red: det Jx > 0, blue: det Jx < 0)")
+    fixed = ", ".join(f"{roadmap.mechanism.joint_names[j]} = {value:g}"
+                      for j, value in roadmap.grid.fixed)
+    ax.set_title(f"global workspace roadmap{', ' + fixed if fixed else ''} "
+                 "(red: positive aspect, blue: negative)")
     ax.set_axis_off()
     return fig
 
 
 def plan_figure(roadmap, plan, sheet_stride=6):
-    """A planned path over the field and in (rho2, rho3, alpha), as the
-    paper's figures 11 to 13.
+    """A planned path over the field and in the grid's plane and the pose's
+    mode coordinate (the 3-RPR: (rho2, rho3, alpha)), as the paper's figures
+    11 to 13.
 
     Parameters
     ----------
     roadmap : Roadmap
     plan : dict
-        :meth:`~rpr3_gwr_core.planner.Plan.to_dict` output.
+        :meth:`~rpr3_gwr_core.planning.Plan.to_dict` output.
     sheet_stride : int
         Draw every n-th cell of the traversed patches in the 3-D view.
 
@@ -115,19 +130,23 @@ def plan_figure(roadmap, plan, sheet_stride=6):
     """
     seg = roadmap.segmentation
     grid = seg.field.grid
-    rho = np.array([w["rho"] for w in plan["waypoints"]]).reshape(-1, 3)
-    pose = np.array([w["pose"] for w in plan["waypoints"]]).reshape(-1, 3)
+    mechanism = roadmap.mechanism
+    u, v, labels, _ = _plane(roadmap)
+    iu, iv = grid.axis_joints
+    mode = mechanism.mode_coordinate
+    joints = np.array([w["joints"] for w in plan["waypoints"]]).reshape(-1, mechanism.n_joints)
+    pose = np.array([w["pose"] for w in plan["waypoints"]]).reshape(-1, mechanism.pose_size)
     fig = Figure(figsize=(13, 6))
     ax = fig.add_subplot(1, 2, 1)
     region = seg.region.reshape(grid.shape).astype(float)
     region[region == 0] = np.nan
-    extent = (grid.rho2[0], grid.rho2[-1], grid.rho3[0], grid.rho3[-1])
-    ax.imshow(region.T, origin="lower", extent=extent, cmap="Pastel1", interpolation="nearest")
-    ax.plot(rho[:, 1], rho[:, 2], "k-", lw=1.5)
-    ax.plot(rho[:1, 1], rho[:1, 2], "go", ms=8, label="start")
-    ax.plot(rho[-1:, 1], rho[-1:, 2], "r*", ms=12, label="goal")
-    ax.set_xlabel(r"$\rho_2$")
-    ax.set_ylabel(r"$\rho_3$")
+    ax.imshow(region.T, origin="lower", extent=(u[0], u[-1], v[0], v[-1]), cmap="Pastel1",
+              interpolation="nearest")
+    ax.plot(joints[:, iu], joints[:, iv], "k-", lw=1.5)
+    ax.plot(joints[:1, iu], joints[:1, iv], "go", ms=8, label="start")
+    ax.plot(joints[-1:, iu], joints[-1:, iv], "r*", ms=12, label="goal")
+    ax.set_xlabel(labels[0])
+    ax.set_ylabel(labels[1])
     paths = plan.get("global_paths") or [[]]
     chosen = paths[max(plan.get("path_index", 0), 0)]
     ax.set_title("global path " + " → ".join(str(p) for p in chosen))
@@ -136,12 +155,12 @@ def plan_figure(roadmap, plan, sheet_stride=6):
     for pid in sorted(set(chosen)):
         patch = seg.patches[pid]
         cells, slots = patch.cells[::sheet_stride], patch.slots[::sheet_stride]
-        r = grid.rho()[cells] if cells.size else np.zeros((0, 3))
-        ax3.scatter(r[:, 1], r[:, 2], seg.field.poses[cells, slots, 2], s=1, alpha=0.25,
-                    label=str(pid))
-    ax3.plot(rho[:, 1], rho[:, 2], pose[:, 2], "k-", lw=2)
-    ax3.set_xlabel(r"$\rho_2$")
-    ax3.set_ylabel(r"$\rho_3$")
-    ax3.set_zlabel(r"$\alpha$ [rad]")
+        coords = grid.coordinates()[cells]
+        ax3.scatter(coords[:, 0], coords[:, 1], seg.field.poses[cells, slots, mode], s=1,
+                    alpha=0.25, label=str(pid))
+    ax3.plot(joints[:, iu], joints[:, iv], pose[:, mode], "k-", lw=2)
+    ax3.set_xlabel(labels[0])
+    ax3.set_ylabel(labels[1])
+    ax3.set_zlabel(mechanism.pose_names[mode])
     ax3.legend(loc="upper left", markerscale=8, title="patch")
     return fig

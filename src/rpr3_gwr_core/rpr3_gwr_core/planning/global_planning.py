@@ -9,8 +9,8 @@ Global paths are the shortest sequences of patches (fewest gates, as in the
 paper, whose A* search is unweighted); all of them are returned, ranked by
 the weighted cost below.  The weighted mode ranks by that cost instead: for a
 gate between patches a and b, the distance in the (rho2, rho3) plane from a's
-centroid to the gate's midpoint and on to b's centroid, plus
-``narrow_penalty * step / width`` so that narrow gates cost more.
+centroid to the gate's midpoint and on to b's centroid, plus ``narrow_penalty`` over the
+gate's number of faces, so that narrow gates cost more.
 """
 
 from dataclasses import dataclass
@@ -19,7 +19,7 @@ from itertools import islice
 import networkx as nx
 import numpy as np
 
-from .exceptions import InvalidInputError
+from ..exceptions import InvalidInputError
 
 __all__ = ["Feasibility", "GlobalPath", "RoadmapIndex", "feasibility", "global_paths",
            "longer_paths"]
@@ -78,14 +78,14 @@ class RoadmapIndex:
         self.aspect = nx.get_node_attributes(self.graph, "aspect")
         seg = roadmap.segmentation
         grid = seg.field.grid
-        coords = grid.rho()[:, 1:]
+        coords = grid.coordinates()
         self.centroid = {pid: coords[p.cells].mean(axis=0) for pid, p in seg.patches.items()}
         self.weighted = nx.Graph()
         self.weighted.add_nodes_from(self.graph.nodes)
         for (a, b), gate in seg.gates.items():
             middle = coords[gate.faces.ravel()].mean(axis=0)
             cost = (np.linalg.norm(self.centroid[a] - middle) + np.linalg.norm(middle - self.centroid[b])
-                    + narrow_penalty * grid.step * grid.step / gate.width)
+                    + narrow_penalty * float(np.prod(grid.steps)) / gate.width)
             self.weighted.add_edge(a, b, cost=float(cost))
 
     def path_cost(self, patches):

@@ -13,10 +13,10 @@ import math
 
 import numpy as np
 
-from .exceptions import InfeasiblePathError, InvalidInputError, ValidationError
+from ..exceptions import InfeasiblePathError, InvalidInputError, ValidationError
 from .global_planning import RoadmapIndex, feasibility, global_paths, longer_paths
 from .local_planning import DEFAULT_CLEARANCE_WEIGHT, LocalPlanner
-from .locate import DEFAULT_ALPHA_TOL, locate
+from .locate import DEFAULT_MODE_TOL, locate
 from .trajectory import chaikin, shortcut, time_parameterize
 from .validation import DEFAULT_MAX_STEP, DEFAULT_MIN_MARGIN, validate_path
 
@@ -45,10 +45,11 @@ class PlanOptions:
     feasibility_only : bool
         Answer from the roadmap alone, without a trajectory.
     max_velocity, max_acceleration : float or None
-        Joint limits [length unit / s, length unit / s**2]; both given means
+        Joint limits [joint unit / s, joint unit / s**2]; both given means
         the trajectory is time-parameterised.
-    alpha_tol : float
-        Tolerance on the start and goal orientations [rad].
+    mode_tol : float
+        Tolerance on the start's and goal's mode coordinate (the 3-RPR's
+        orientation [rad]).
     max_paths : int
         Most global paths reported.
     """
@@ -58,7 +59,7 @@ class PlanOptions:
     feasibility_only: bool = False
     max_velocity: float = None
     max_acceleration: float = None
-    alpha_tol: float = DEFAULT_ALPHA_TOL
+    mode_tol: float = DEFAULT_MODE_TOL
     max_paths: int = 8
 
     def __post_init__(self):
@@ -70,8 +71,8 @@ class PlanOptions:
         for name, value in zip(("max_velocity", "max_acceleration"), limits):
             if value is not None and not (math.isfinite(value) and value > 0):
                 raise InvalidInputError(f"{name} must be positive and finite, got {value}")
-        if not (math.isfinite(self.alpha_tol) and self.alpha_tol > 0):
-            raise InvalidInputError(f"alpha_tol must be positive, got {self.alpha_tol}")
+        if not (math.isfinite(self.mode_tol) and self.mode_tol > 0):
+            raise InvalidInputError(f"mode_tol must be positive, got {self.mode_tol}")
         if int(self.max_paths) < 1:
             raise InvalidInputError("max_paths must be at least 1")
 
@@ -90,14 +91,14 @@ class Plan:
         Best first.
     path_index : int
         Which global path the trajectory follows (-1 without trajectory).
-    rho : ndarray, shape (n, 3)
-        Leg waypoints [length unit] (empty with ``feasibility_only``).
-    poses : ndarray, shape (n, 3)
-        Platform pose followed along them [length unit, length unit, rad].
+    joints : ndarray, shape (n, n_joints)
+        Joint waypoints [joint unit] (empty with ``feasibility_only``).
+    poses : ndarray, shape (n, pose_size)
+        Platform pose followed along them.
     patches : ndarray of int, shape (n,)
         Patch of each waypoint.
     times, velocities, accelerations : ndarray or None
-        Time parameterisation [s, length unit / s, length unit / s**2].
+        Time parameterisation [s, joint unit / s, joint unit / s**2].
     validation : Validation or None
     smoothed : bool
         Whether the smoothed path was kept.
@@ -109,8 +110,8 @@ class Plan:
     goal: object
     global_paths: list
     path_index: int = -1
-    rho: np.ndarray = dataclass_field(default_factory=lambda: np.zeros((0, 3)))
-    poses: np.ndarray = dataclass_field(default_factory=lambda: np.zeros((0, 3)))
+    joints: np.ndarray = dataclass_field(default_factory=lambda: np.zeros((0, 0)))
+    poses: np.ndarray = dataclass_field(default_factory=lambda: np.zeros((0, 0)))
     patches: np.ndarray = dataclass_field(default_factory=lambda: np.zeros(0, int))
     times: np.ndarray = None
     velocities: np.ndarray = None
@@ -125,8 +126,8 @@ class Plan:
                "global_paths": [list(g.patches) for g in self.global_paths],
                "global_path_costs": [g.cost for g in self.global_paths],
                "path_index": self.path_index, "smoothed": self.smoothed,
-               "waypoints": [{"rho": r.tolist(), "pose": p.tolist(), "patch": int(k)}
-                             for r, p, k in zip(self.rho, self.poses, self.patches)]}
+               "waypoints": [{"joints": q.tolist(), "pose": p.tolist(), "patch": int(k)}
+                             for q, p, k in zip(self.joints, self.poses, self.patches)]}
         if self.times is not None:
             out["times"] = self.times.tolist()
             out["velocities"] = self.velocities.tolist()
@@ -137,7 +138,7 @@ class Plan:
 
 
 def _location_dict(location):
-    return {"rho": location.rho.tolist(), "pose": location.pose.tolist(),
+    return {"joints": location.joints.tolist(), "pose": location.pose.tolist(),
             "patch": location.patch, "cell": location.cell, "margin": location.margin}
 
 
@@ -163,14 +164,13 @@ class Planner:
         self.local = LocalPlanner(roadmap, clearance_weight, low_margin=3 * min_margin)
         self.min_margin = float(min_margin)
         self.max_step = float(max_step)
-        self._rho = roadmap.grid.rho()
+        self._joints = roadmap.grid.joints()
 
-    def locate(self, configuration, alpha_tol=DEFAULT_ALPHA_TOL):
-        """:func:`~rpr3_gwr_core.locate.locate` of ``(rho1, rho2, rho3, alpha)``."""
-        configuration = tuple(configuration)
-        if len(configuration) != 4:
-            raise InvalidInputError("a configuration is (rho1, rho2, rho3, alpha)")
-        return locate(self.roadmap, *configuration, alpha_tol=alpha_tol,
+    def locate(self, configuration, mode_tol=DEFAULT_MODE_TOL):
+        """:func:`~rpr3_gwr_core.planning.locate.locate` of a configuration:
+        the joints, then the mode coordinate (the 3-RPR's
+        ``(rho1, rho2, rho3, alpha)``)."""
+        return locate(self.roadmap, configuration, mode_tol=mode_tol,
                       min_margin=self.min_margin, max_step=self.max_step)
 
     def plan(self, start, goal, options=PlanOptions()):
@@ -179,7 +179,8 @@ class Planner:
         Parameters
         ----------
         start, goal : sequence of float
-            ``(rho1, rho2, rho3, alpha)`` [length unit x 3, rad].
+            The joints, then the mode coordinate (the 3-RPR's
+            ``(rho1, rho2, rho3, alpha)`` [length unit x 3, rad]).
         options : PlanOptions
 
         Returns
@@ -194,8 +195,8 @@ class Planner:
             ``InvalidInputError`` when the limits cannot time the path, or
             the locating errors of :func:`~rpr3_gwr_core.locate.locate`.
         """
-        s = self.locate(start, options.alpha_tol)
-        g = self.locate(goal, options.alpha_tol)
+        s = self.locate(start, options.mode_tol)
+        g = self.locate(goal, options.mode_tol)
         answer = feasibility(self.index, s.patch, g.patch)
         if not answer.feasible:
             error = InfeasiblePathError(
@@ -204,11 +205,14 @@ class Planner:
             raise error
         paths = global_paths(self.index, s.patch, g.patch, options.weighted, options.max_paths)
         if options.feasibility_only:
-            return Plan(True, answer.reason, s, g, paths)
+            mechanism = self.roadmap.mechanism
+            return Plan(True, answer.reason, s, g, paths,
+                        joints=np.zeros((0, mechanism.n_joints)),
+                        poses=np.zeros((0, mechanism.pose_size)))
         failures = []
         for k, path in enumerate(self._attempts(paths, s.patch, g.patch)):
             try:
-                result, rho, patches, local = self._validated_path(path, s, g)
+                result, joints, patches, local = self._validated_path(path, s, g)
             except InfeasiblePathError as exc:
                 failures.append(f"path {list(path.patches)}: {exc}")
                 continue
@@ -216,16 +220,16 @@ class Planner:
                 failures.append(f"path {list(path.patches)}: {result.reason}")
                 continue
             smoothed = False
-            if options.smooth and len(rho) > 2:
-                rho_s, patches_s = self._smooth(rho, patches, local)
-                result_s = validate_path(self.roadmap.geometry, rho_s, s.pose, g.pose,
+            if options.smooth and len(joints) > 2:
+                joints_s, patches_s = self._smooth(joints, patches, local)
+                result_s = validate_path(self.roadmap.mechanism, joints_s, s.pose, g.pose,
                                          self.min_margin, self.max_step)
                 if result_s.ok:
-                    rho, patches, result, smoothed = rho_s, patches_s, result_s, True
+                    joints, patches, result, smoothed = joints_s, patches_s, result_s, True
             timing = (None, None, None)
             if options.max_velocity is not None:
-                timing = time_parameterize(rho, options.max_velocity, options.max_acceleration)
-            return Plan(True, answer.reason, s, g, paths, path_index=k, rho=rho,
+                timing = time_parameterize(joints, options.max_velocity, options.max_acceleration)
+            return Plan(True, answer.reason, s, g, paths, path_index=k, joints=joints,
                         poses=result.poses, patches=patches, times=timing[0],
                         velocities=timing[1], accelerations=timing[2], validation=result,
                         smoothed=smoothed)
@@ -253,28 +257,28 @@ class Planner:
         blocked = set()
         for _ in range(_REPAIRS + 1):
             local = self.local.plan(path.patches, s.cell, g.cell, blocked)
-            rho, patches, cells = self._waypoints(s, g, local)
-            result = validate_path(self.roadmap.geometry, rho, s.pose, g.pose,
+            joints, patches, cells = self._waypoints(s, g, local)
+            result = validate_path(self.roadmap.mechanism, joints, s.pose, g.pose,
                                    self.min_margin, self.max_step)
             k = result.failed_segment
             if result.ok or k < 1 or min(cells[k - 1], cells[k]) < 0:
                 break
             blocked.add((int(cells[k - 1]), int(cells[k])))
-        return result, rho, patches, local
+        return result, joints, patches, local
 
     def _waypoints(self, s, g, local):
         """Exact start, the cell centres, exact goal; repeated points dropped.
 
         Returns the legs, the patch of each waypoint and its cell (-1 for
         the exact start and goal)."""
-        rho = np.vstack([s.rho, self._rho[local.cells], g.rho])
+        joints = np.vstack([s.joints, self._joints[local.cells], g.joints])
         patches = np.concatenate([[s.patch], local.patches, [g.patch]])
         cells = np.concatenate([[-1], local.cells, [-1]])
-        keep = np.ones(len(rho), dtype=bool)
-        keep[1:] = np.any(np.abs(np.diff(rho, axis=0)) > 1e-12, axis=1)
-        return rho[keep], patches[keep], cells[keep]
+        keep = np.ones(len(joints), dtype=bool)
+        keep[1:] = np.any(np.abs(np.diff(joints, axis=0)) > 1e-12, axis=1)
+        return joints[keep], patches[keep], cells[keep]
 
-    def _smooth(self, rho, patches, local):
+    def _smooth(self, joints, patches, local):
         """Shortcut inside each patch, then round the corners.
 
         A shortcut or a rounded corner must keep ``_SMOOTH_CLEARANCE`` cells from
@@ -297,15 +301,16 @@ class Planner:
             slots = np.argmax(member, axis=1)
             return np.where(member.any(axis=1), np.abs(seg.field.margin[cells, slots]), 0.0)
 
-        path_cells = grid.cells_of(rho[:, 1], rho[:, 2])
+        free = list(grid.axis_joints)
+        path_cells = grid.cells_of(joints[:, free])
         path_margin = np.array([patch_margin(pid, np.array([c]))[0]
                                 for pid, c in zip(patches, path_cells)])
 
         def clear(a, b, pid, floor):
-            span = np.max(np.abs(b[1:] - a[1:])) / grid.step
+            span = np.max(np.abs(b[free] - a[free])) / grid.step
             t = np.linspace(0.0, 1.0, max(2, int(span * _SAMPLES_PER_CELL)))
-            points = a[1:] * (1 - t)[:, None] + b[1:] * t[:, None]
-            cells = grid.cells_of(points[:, 0], points[:, 1])
+            points = a[free] * (1 - t)[:, None] + b[free] * t[:, None]
+            cells = grid.cells_of(points)
             if np.any(cells < 0):
                 return False
             # Full clearance along the segment; near its ends, which are
@@ -317,16 +322,17 @@ class Planner:
 
         def allowed(i, j):
             return bool(np.all(patches[i:j + 1] == patches[i])) and clear(
-                rho[i], rho[j], patches[i], path_margin[i:j + 1].min())
+                joints[i], joints[j], patches[i], path_margin[i:j + 1].min())
 
-        keep = shortcut(rho[:, 1:], allowed)
-        rho_k, patches_k = rho[keep], patches[keep]
+        keep = shortcut(joints[:, free], allowed)
+        joints_k, patches_k = joints[keep], patches[keep]
         # Round each patch's stretch separately so gate crossings stay in
         # place, and only where the rounded corners keep their clearance.
         pieces, owners = [], []
         bounds = np.flatnonzero(np.diff(patches_k)) + 1
         floors = np.minimum.reduceat(path_margin[keep], np.concatenate([[0], bounds]))
-        for piece, owner, floor in zip(np.split(rho_k, bounds), np.split(patches_k, bounds), floors):
+        for piece, owner, floor in zip(np.split(joints_k, bounds), np.split(patches_k, bounds),
+                                       floors):
             rounded = chaikin(piece)
             if not all(clear(a, b, owner[0], floor) for a, b in zip(rounded, rounded[1:])):
                 rounded = piece

@@ -1,7 +1,7 @@
 """Turning a cell path into a leg trajectory: smoothing and timing.
 
-Smoothing works in the (rho2, rho3) plane of the path (rho1 is fixed):
-shortcutting replaces a stretch of the path by a straight segment when every
+Smoothing works in the grid's coordinates of the path (the joints on its
+axes; the others are fixed): shortcutting replaces a stretch of the path by a straight segment when every
 cell that segment passes over (sampled at a fifth of a cell) belongs, in
 order, to the patches of the stretch, and keeps ``min_clearance`` cells from
 the patch boundary except within a few cells of the stretch's gate
@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from .exceptions import InvalidInputError
+from ..exceptions import InvalidInputError
 
 __all__ = ["shortcut", "chaikin", "time_parameterize"]
 
@@ -31,8 +31,8 @@ def shortcut(points, allowed, max_passes=3):
 
     Parameters
     ----------
-    points : ndarray, shape (n, 2)
-        Path in the (rho2, rho3) plane [length unit].
+    points : ndarray, shape (n, d)
+        Path in the grid's coordinates [joint unit].
     allowed : callable
         ``allowed(i, j)`` is True when the straight segment from point i to
         point j may replace the points between them.
@@ -88,28 +88,28 @@ def chaikin(points, iterations=2):
     return points
 
 
-def time_parameterize(rho_path, max_velocity, max_acceleration):
+def time_parameterize(path, max_velocity, max_acceleration):
     """Time stamps, joint velocities and accelerations along a leg path.
 
     Parameters
     ----------
-    rho_path : ndarray, shape (n, 3)
-        Waypoints [length unit], no two consecutive ones equal.
+    path : ndarray, shape (n, n_joints)
+        Waypoints [joint unit], no two consecutive ones equal.
     max_velocity : float
-        Largest joint speed [length unit / s].
+        Largest joint speed [joint unit / s].
     max_acceleration : float
-        Largest joint acceleration [length unit / s**2].
+        Largest joint acceleration [joint unit / s**2].
 
     Returns
     -------
     times : ndarray, shape (n,)
         [s], starting at 0.
-    velocities : ndarray, shape (n, 3)
-        Joint velocities at the waypoints [length unit / s]: differences of
+    velocities : ndarray, shape (n, n_joints)
+        Joint velocities at the waypoints [joint unit / s]: differences of
         the positions over the times (central inside, zero at the ends), so
         they integrate back to the path and never exceed ``max_velocity``.
-    accelerations : ndarray, shape (n, 3)
-        Joint accelerations at the waypoints [length unit / s**2]: central
+    accelerations : ndarray, shape (n, n_joints)
+        Joint accelerations at the waypoints [joint unit / s**2]: central
         differences of the velocities (one-sided at the ends).  Where one
         would exceed ``max_acceleration`` the speed there is lowered and the
         profile recomputed, so all of them respect it.
@@ -124,11 +124,11 @@ def time_parameterize(rho_path, max_velocity, max_acceleration):
     if not (math.isfinite(max_velocity) and max_velocity > 0
             and math.isfinite(max_acceleration) and max_acceleration > 0):
         raise InvalidInputError("velocity and acceleration limits must be positive and finite")
-    rho_path = np.asarray(rho_path, dtype=float)
-    n = len(rho_path)
+    path = np.asarray(path, dtype=float)
+    n = len(path)
     if n == 1:
-        return np.zeros(1), np.zeros((1, 3)), np.zeros((1, 3))
-    delta = np.diff(rho_path, axis=0)
+        return np.zeros(1), np.zeros_like(path), np.zeros_like(path)
+    delta = np.diff(path, axis=0)
     length = np.linalg.norm(delta, axis=1)
     if np.any(length == 0):
         raise InvalidInputError("consecutive waypoints must differ")
@@ -148,7 +148,7 @@ def time_parameterize(rho_path, max_velocity, max_acceleration):
         for _ in range(_MAX_REFINEMENTS):
             speed = _speed_profile(cap, length, half)
             times = _times(speed, length, half)
-            velocities = _velocities(rho_path, times)
+            velocities = _velocities(path, times)
             accelerations = _differences(velocities, times)
             excess = np.max(np.abs(accelerations), axis=1) / max_acceleration
             if np.all(excess <= 1.0):

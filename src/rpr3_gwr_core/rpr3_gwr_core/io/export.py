@@ -1,14 +1,14 @@
 """Roadmaps to and from JSON, and to GEXF (the paper drew its GWRs with Gephi).
 
-JSON schema (``format = "rpr3-gwr-roadmap"``, ``version = 1``), all lengths
-in the geometry's length unit and angles in radians::
+JSON schema (``format = "rpr3-gwr-roadmap"``, ``version = 2``); lengths in
+the mechanism's length unit, angles in radians::
 
     {
-      "format": "rpr3-gwr-roadmap", "version": 1,
-      "geometry": {"a1": [x, y], "a2": [x, y], "a3": [x, y],
-                   "d1": float, "d3": float, "beta": float},
-      "grid": {"rho1": float, "rho2_range": [min, max],
-               "rho3_range": [min, max], "step": float},
+      "format": "rpr3-gwr-roadmap", "version": 2,
+      "mechanism": {"kind": "3-RPR", ...its parameters},
+      "grid": {"axes": [{"joint": int, "min": float, "max": float,
+                         "step": float}, ...],
+               "fixed": [{"joint": int, "value": float}, ...]},
       "regions": [{"id": int, "n_solutions": int, "cells": int}],
       "patches": [{"id": int, "region": int, "layer": int, "aspect": +1 | -1,
                    "n_solutions": int, "cells": int, "area": float,
@@ -18,17 +18,22 @@ in the geometry's length unit and angles in radians::
       "aspect_groups": [[patch id, ...], ...],
       "field": {                      # optional; needed to plan from the file
         "count": base64 of uint8[n_cells],
-        "poses": base64 of little-endian float64[n_cells, 6, 3] (NaN = none),
-        "margin": base64 of little-endian float64[n_cells, 6],
+        "poses": base64 of little-endian float64[n_cells, max_solutions,
+                 pose_size] (NaN = none),
+        "margin": base64 of little-endian float64[n_cells, max_solutions],
         "region": base64 of little-endian int32[n_cells],
-        "patch": base64 of little-endian int32[n_cells, 6],
-        "links": [base64 of int8[n_faces_of_axis, 6], ...]  # per axis, faces in
-                 # row-major order of their lower cell: m[k, i] = j links solution
-                 # i of the lower cell to solution j of the upper one, -1 none
+        "patch": base64 of little-endian int32[n_cells, max_solutions],
+        "links": [base64 of int8[n_faces_of_axis, max_solutions], ...]
+                 # per axis, faces in row-major order of their lower cell:
+                 # m[k, i] = j links solution i of the lower cell to solution
+                 # j of the upper one, -1 none
       }
     }
 
-Cells are flat row-major indices ``i * n3 + j`` of ``(rho2[i], rho3[j])``.
+Cells are flat row-major indices over the grid's axes.  Reading a document
+back derives patches and gates from the field's arrays
+(:meth:`~rpr3_gwr_core.workspace.segmentation.Segmentation.from_arrays`),
+as the ROS nodes' message decoder does.
 """
 
 import base64
@@ -37,18 +42,16 @@ import json
 import networkx as nx
 import numpy as np
 
-from .continuity import neighbour_pairs
-from .exceptions import InvalidInputError
-from .field import Grid, NSolutionField
-from .geometry import Geometry
-from .kinematics import MAX_SOLUTIONS
-from .roadmap import Roadmap, aspect_groups, roadmap_graph
-from .segmentation import Gate, Patch, Segmentation
+from ..exceptions import InvalidInputError
+from ..mechanisms import mechanism_from_dict
+from ..workspace import (Grid, NSolutionField, Roadmap, Segmentation, aspect_groups,
+                         roadmap_graph)
+from ..workspace.continuity import neighbour_pairs
 
 __all__ = ["roadmap_summary", "roadmap_to_json", "roadmap_from_json", "roadmap_to_gexf"]
 
 FORMAT = "rpr3-gwr-roadmap"
-VERSION = 1
+VERSION = 2
 
 
 def roadmap_summary(roadmap, with_faces=False):
@@ -65,7 +68,7 @@ def roadmap_summary(roadmap, with_faces=False):
     dict
     """
     seg = roadmap.segmentation
-    cell_area = seg.field.grid.step ** 2
+    cell_volume = float(np.prod(seg.field.grid.steps))
     regions = []
     for r in range(1, seg.n_regions + 1):
         cells = np.flatnonzero(seg.region == r)
@@ -75,7 +78,7 @@ def roadmap_summary(roadmap, with_faces=False):
     for pid, patch in sorted(seg.patches.items()):
         entry = {"id": pid, "region": patch.region, "layer": patch.layer,
                  "aspect": patch.aspect, "n_solutions": patch.n_solutions,
-                 "cells": int(patch.cells.size), "area": float(patch.cells.size * cell_area)}
+                 "cells": int(patch.cells.size), "area": float(patch.cells.size * cell_volume)}
         if with_faces:
             entry["gate_cells"] = patch.gate_cells.tolist()
             entry["singular_cells"] = patch.singular_cells.tolist()
@@ -87,7 +90,7 @@ def roadmap_summary(roadmap, with_faces=False):
             entry["faces"] = gate.faces.tolist()
         gates.append(entry)
     return {"format": FORMAT, "version": VERSION,
-            "geometry": seg.field.geometry.to_dict(), "grid": seg.field.grid.to_dict(),
+            "mechanism": seg.field.mechanism.to_dict(), "grid": seg.field.grid.to_dict(),
             "regions": regions, "patches": patches, "gates": gates,
             "aspect_groups": aspect_groups(roadmap.graph)}
 
@@ -137,39 +140,29 @@ def roadmap_from_json(text):
     if "field" not in data:
         raise InvalidInputError("the document has no field: write it with include_field=True")
     try:
-        geometry = Geometry.from_dict(data["geometry"])
+        mechanism = mechanism_from_dict(data["mechanism"])
         grid = Grid.from_dict(data["grid"])
-        n = grid.size
+        n, slots, size = grid.size, mechanism.max_solutions, mechanism.pose_size
         raw = data["field"]
         field = NSolutionField(
-            geometry=geometry, grid=grid, count=_decode(raw["count"], "<u1", (n,)),
-            poses=_decode(raw["poses"], "<f8", (n, MAX_SOLUTIONS, 3)),
-            margin=_decode(raw["margin"], "<f8", (n, MAX_SOLUTIONS)))
-        region = _decode(raw["region"], "<i4", (n,)).astype(np.int32)
+            mechanism=mechanism, grid=grid, count=_decode(raw["count"], "<u1", (n,)),
+            poses=_decode(raw["poses"], "<f8", (n, slots, size)),
+            margin=_decode(raw["margin"], "<f8", (n, slots)))
         faces = neighbour_pairs(grid.shape)
         if len(raw["links"]) != len(faces):
             raise InvalidInputError("links do not match the grid's axes")
-        links = [(lo, up, _decode(text, "<i1", (lo.size, MAX_SOLUTIONS)))
-                 for (lo, up), text in zip(faces, raw["links"])]
-        patch = _decode(raw["patch"], "<i4", (n, MAX_SOLUTIONS)).astype(np.int32)
-        patches = {}
-        for entry in data["patches"]:
-            pid = int(entry["id"])
-            cells, slots = np.nonzero(patch == pid)
-            patches[pid] = Patch(id=pid, region=int(entry["region"]), layer=int(entry["layer"]),
-                                 aspect=int(entry["aspect"]),
-                                 n_solutions=int(entry["n_solutions"]), cells=cells, slots=slots,
-                                 gate_cells=np.array(entry["gate_cells"], dtype=np.int64),
-                                 singular_cells=np.array(entry["singular_cells"], dtype=np.int64))
-        gates = {}
-        for entry in data["gates"]:
-            key = tuple(int(p) for p in entry["patches"])
-            gates[key] = Gate(patches=key, faces=np.array(entry["faces"], dtype=np.int64).reshape(-1, 2),
-                              width=float(entry["width"]))
+        links = [_decode(text, "<i1", (lo.size, slots))
+                 for (lo, _), text in zip(faces, raw["links"])]
+        segmentation = Segmentation.from_arrays(
+            field, _decode(raw["region"], "<i4", (n,)), _decode(raw["patch"], "<i4", (n, slots)),
+            links)
+        # The summary sections must describe the roadmap the arrays make.
+        listed = ({int(p["id"]) for p in data["patches"]},
+                  {tuple(int(i) for i in g["patches"]) for g in data["gates"]})
     except (KeyError, TypeError, ValueError) as exc:
         raise InvalidInputError(f"malformed roadmap document: {exc}") from exc
-    segmentation = Segmentation(field=field, region=region, patch=patch, patches=patches,
-                                gates=gates, links=links)
+    if listed != (set(segmentation.patches), set(segmentation.gates)):
+        raise InvalidInputError("the document's patches and gates do not match its field")
     return Roadmap(segmentation=segmentation, graph=roadmap_graph(segmentation), timings={})
 
 

@@ -13,7 +13,7 @@ branch point of the previous disk.  The implementation keeps explicit stacks
 
 import numpy as np
 
-from .exceptions import InvalidInputError
+from ..exceptions import InvalidInputError
 
 __all__ = ["rotary_order", "rotary_disk_search", "passage_from_links"]
 

@@ -25,7 +25,7 @@ import scipy.sparse as sparse
 from scipy.ndimage import distance_transform_edt
 from scipy.sparse.csgraph import dijkstra
 
-from .exceptions import InfeasiblePathError, InvalidInputError
+from ..exceptions import InfeasiblePathError, InvalidInputError
 
 __all__ = ["LocalPlanner", "LocalPath", "DEFAULT_CLEARANCE_WEIGHT"]
 
@@ -70,7 +70,8 @@ class _Profile:
 
 
 class LocalPlanner:
-    """Cost-weighted planning on the 2D profiles of a roadmap's patches.
+    """Cost-weighted planning on the profiles of a roadmap's patches (cells of
+    any dimension).
 
     Parameters
     ----------
@@ -92,10 +93,11 @@ class LocalPlanner:
         self._links = self._links_by_patch()
 
     def _links_by_patch(self):
-        """Per patch, the (lower, upper) cells of its continuation links."""
+        """Per patch, the (lower, upper) cells of its continuation links and
+        the step of each link's axis."""
         seg = self.segmentation
         found = {}
-        for lower, upper, match in seg.links:
+        for (lower, upper, match), step in zip(seg.links, seg.field.grid.steps):
             rows, slots = np.nonzero(match >= 0)
             a = seg.patch[lower[rows], slots]
             b = seg.patch[upper[rows], match[rows, slots].astype(np.int64)]
@@ -107,8 +109,9 @@ class LocalPlanner:
             for chunk_p, chunk_lo, chunk_up in zip(np.split(pids, bounds), np.split(lo, bounds),
                                                    np.split(up, bounds)):
                 if chunk_p.size:
-                    found.setdefault(int(chunk_p[0]), []).append((chunk_lo, chunk_up))
-        return {pid: (np.concatenate([lo for lo, _ in v]), np.concatenate([up for _, up in v]))
+                    found.setdefault(int(chunk_p[0]), []).append(
+                        (chunk_lo, chunk_up, np.full(chunk_lo.size, step)))
+        return {pid: tuple(np.concatenate([link[k] for link in v]) for k in range(3))
                 for pid, v in found.items()}
 
     def profile(self, pid):
@@ -130,7 +133,8 @@ class LocalPlanner:
         own = seg.region[patch.cells] == patch.region
         mask = np.zeros(shape, dtype=bool)
         mask.flat[patch.cells[own]] = True
-        depth = distance_transform_edt(np.pad(mask, 1))[1:-1, 1:-1]
+        inner = tuple(slice(1, -1) for _ in shape)
+        depth = distance_transform_edt(np.pad(mask, 1))[inner]
         return np.where(own, depth.ravel()[patch.cells], _UNRESOLVED_DEPTH)
 
     def _build_profile(self, pid):
@@ -140,9 +144,10 @@ class LocalPlanner:
         # far more, so a path crosses them only where nothing else leads on.
         margin = np.abs(self.segmentation.field.margin[patch.cells, patch.slots])
         cost = np.where(margin < self.low_margin, cost * _LOW_MARGIN_FACTOR, cost)
-        lower, upper = self._links.get(pid, (np.zeros(0, int), np.zeros(0, int)))
+        lower, upper, step = self._links.get(pid, (np.zeros(0, int), np.zeros(0, int),
+                                                   np.zeros(0)))
         lower, upper = np.searchsorted(patch.cells, lower), np.searchsorted(patch.cells, upper)
-        weight = 0.5 * self.segmentation.field.grid.step * (cost[lower] + cost[upper])
+        weight = 0.5 * step * (cost[lower] + cost[upper])
         return _Profile(cells=patch.cells, slots=patch.slots, cost=cost, lower=lower,
                         upper=upper, weight=weight)
 

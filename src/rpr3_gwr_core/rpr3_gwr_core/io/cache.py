@@ -1,7 +1,7 @@
-"""An on-disk cache of built roadmaps, keyed by geometry, grid and format.
+"""An on-disk cache of built roadmaps, keyed by mechanism, grid and format.
 
 The only module of the core that touches the file system: the CLI and the
-nodes use it so that a second call with the same geometry and grid loads the
+nodes use it so that a second call with the same mechanism and grid loads the
 roadmap instead of rebuilding it.  Entries are the JSON of
 :func:`~rpr3_gwr_core.export.roadmap_to_json`, written atomically.
 """
@@ -11,9 +11,9 @@ import json
 import os
 import tempfile
 
-from .exceptions import InvalidInputError
+from ..exceptions import InvalidInputError
+from ..workspace import build_roadmap
 from .export import FORMAT, VERSION, roadmap_from_json, roadmap_to_json
-from .roadmap import build_roadmap
 
 __all__ = ["default_cache_dir", "cache_key", "cached_roadmap"]
 
@@ -29,20 +29,20 @@ def default_cache_dir():
     return os.path.join(base, "rpr3-gwr")
 
 
-def cache_key(geometry, grid, method="components", min_region_cells=8):
+def cache_key(mechanism, grid, method="components", min_region_cells=8):
     """Hex digest identifying a roadmap build."""
     text = json.dumps({"format": FORMAT, "version": VERSION, "revision": ALGORITHM_REVISION,
-                       "geometry": geometry.to_dict(), "grid": grid.to_dict(),
+                       "mechanism": mechanism.to_dict(), "grid": grid.to_dict(),
                        "method": method, "min_region_cells": min_region_cells}, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
-def cached_roadmap(geometry, grid, cache_dir=None, progress=None):
+def cached_roadmap(mechanism, grid, cache_dir=None, progress=None):
     """Load a roadmap from the cache, or build and store it.
 
     Parameters
     ----------
-    geometry : Geometry
+    mechanism : Mechanism
     grid : Grid
     cache_dir : str, optional
         Defaults to :func:`default_cache_dir`.
@@ -56,14 +56,14 @@ def cached_roadmap(geometry, grid, cache_dir=None, progress=None):
         Whether it came from the cache.
     """
     directory = cache_dir or default_cache_dir()
-    path = os.path.join(directory, cache_key(geometry, grid) + ".json")
+    path = os.path.join(directory, cache_key(mechanism, grid) + ".json")
     if os.path.exists(path):
         try:
             with open(path, encoding="utf-8") as stream:
                 return roadmap_from_json(stream.read()), True
         except InvalidInputError:
             pass  # a damaged entry is rebuilt below
-    roadmap = build_roadmap(geometry, grid, progress=progress)
+    roadmap = build_roadmap(mechanism, grid, progress=progress)
     os.makedirs(directory, exist_ok=True)
     handle, tmp = tempfile.mkstemp(dir=directory, suffix=".tmp")
     with os.fdopen(handle, "w", encoding="utf-8") as stream:

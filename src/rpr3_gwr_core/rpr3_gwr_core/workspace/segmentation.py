@@ -15,11 +15,13 @@ Definitions (paper sections 2 to 4):
   cells (default 8, far below the 100-cell smallest region of the paper's
   case) is no region: its cells get region 0.
 * A *patch* is one solution sheet over a region: the solutions of the region's
-  cells connected by continuation.  Its id is ``10 * region + layer``; layers
-  are numbered 1..n in the order of the sheets' orientations alpha at the
-  region's first cell (lowest flat index), taken in [-pi, pi) after the
-  sheets are sorted by aspect, negative first.  (With ten or more solutions
-  the scheme would clash; the 3-RPR has at most six.)
+  cells connected by continuation.  Its layers are numbered 1..n in the
+  mechanism's order of the solutions at the region's first cell (lowest flat
+  index; for the 3-RPR, by orientation alpha) after the sheets are sorted by
+  aspect, negative first.  Its id is ``region * 10**k + layer`` with ``k``
+  the number of digits of the mechanism's most solutions (``10 * region +
+  layer`` for the 3-RPR's six), so ids never clash; the data model does not
+  decode them: a :class:`Patch` carries its region and layer.
 * Only the ill-conditioned solutions of unresolved cells are dropped: a set of
   their solutions connected by continuation joins the patch it continues
   into (the one it has most links with; ties: lowest id), since its sheet is
@@ -46,9 +48,8 @@ import numpy as np
 import scipy.sparse as sparse
 from scipy.sparse.csgraph import connected_components
 
+from ..exceptions import InvalidInputError
 from .continuity import match_solutions, neighbour_pairs
-from .exceptions import InvalidInputError
-from .kinematics import MAX_SOLUTIONS
 from .rotary_disk import passage_from_links, rotary_disk_search
 
 __all__ = ["Patch", "Gate", "Segmentation", "segment"]
@@ -63,7 +64,7 @@ class Patch:
     Attributes
     ----------
     id : int
-        ``10 * region + layer``.
+        ``region * 10**k + layer`` (module doc).
     region, layer : int
     aspect : int
         ``sign(det Jx)`` shared by all its solutions, +1 or -1.
@@ -101,7 +102,8 @@ class Gate:
     faces : ndarray of int, shape (k, 2)
         Crossing faces as ``(cell of patches[0], cell of patches[1])``.
     width : float
-        ``k * step`` [length unit].
+        Total measure of its faces: their number times the step for 2-D
+        grids [joint unit**(d - 1)].
     """
 
     patches: tuple
@@ -117,15 +119,15 @@ class Segmentation:
     ----------
     field : NSolutionField
     region : ndarray of int32, shape (n_cells,)
-        Region id of each cell, 0 for none (no solution, or ill-conditioned).
-    patch : ndarray of int32, shape (n_cells, 6)
+        Region id of each cell, 0 for none (no solution, or unresolved).
+    patch : ndarray of int32, shape (n_cells, max_solutions)
         Patch id of each solution of each cell, 0 for none.
     patches : dict of int to Patch
     gates : dict of (int, int) to Gate
     links : list of (ndarray, ndarray, ndarray)
         Per grid axis, the face-adjacent cells ``(lower, upper)`` and the
         continuation links of their solutions
-        (:func:`~rpr3_gwr_core.continuity.match_solutions`).
+        (:func:`~rpr3_gwr_core.workspace.continuity.match_solutions`).
     """
 
     field: object
@@ -139,6 +141,41 @@ class Segmentation:
     def n_regions(self):
         """Number of regions R."""
         return int(self.region.max(initial=0))
+
+    @classmethod
+    def from_arrays(cls, field, region, patch, links):
+        """The segmentation of a field from its region, patch and link arrays.
+
+        :func:`segment` ends here, and so does every decoder (JSON, ROS
+        messages): patches, gates and boundaries are derived from the arrays
+        alone, so a roadmap travels as those arrays.
+
+        Parameters
+        ----------
+        field : NSolutionField
+        region : ndarray of int, shape (n_cells,)
+        patch : ndarray of int, shape (n_cells, max_solutions)
+        links : list of ndarray of int8, shape (n_faces_of_axis, max_solutions)
+            Per axis, the continuation links of the faces in the order of
+            :func:`~rpr3_gwr_core.workspace.continuity.neighbour_pairs`.
+
+        Raises
+        ------
+        InvalidInputError
+            If the arrays do not fit the field's grid.
+        """
+        n, slots = field.grid.size, field.max_solutions
+        pairs = neighbour_pairs(field.grid.shape)
+        region = np.asarray(region)
+        patch = np.asarray(patch)
+        if (region.shape != (n,) or patch.shape != (n, slots) or len(links) != len(pairs)
+                or any(np.shape(m) != (lo.size, slots) for m, (lo, _) in zip(links, pairs))):
+            raise InvalidInputError("region, patch and link arrays do not fit the field's grid")
+        links = [(lo, up, np.asarray(m, dtype=np.int8)) for (lo, up), m in zip(pairs, links)]
+        region, patch = region.astype(np.int32), patch.astype(np.int32)
+        return cls(field=field, region=region, patch=patch,
+                   patches=_describe_patches(field, region, patch, links),
+                   gates=_gates(field, patch, links), links=links)
 
 
 def segment(field, method="components", min_region_cells=8):
@@ -167,17 +204,14 @@ def segment(field, method="components", min_region_cells=8):
     links = [(lo, up, match) for (lo, up), match in zip(pairs, matches)]
     region = _regions(field, links, int(min_region_cells))
     disk_links = _within_region_links(field, region, links)
-    n_disks = field.grid.size * MAX_SOLUTIONS
+    n_disks = field.grid.size * field.max_solutions
     valid = (field.valid & (region[:, None] > 0)).ravel()
     if method == "rds":
         component = _components_by_rds(valid, disk_links, len(field.grid.shape))
     else:
         component = _components_by_csgraph(valid, disk_links, n_disks)
     patch = _absorb_unresolved(field, region, _number_patches(field, region, component), links)
-    patches = _describe_patches(field, region, patch, links)
-    gates = _gates(field, patch, links)
-    return Segmentation(field=field, region=region, patch=patch, patches=patches, gates=gates,
-                        links=links)
+    return Segmentation.from_arrays(field, region, patch, [m for _, _, m in links])
 
 
 def _regions(field, links, min_cells):
@@ -206,12 +240,12 @@ def _regions(field, links, min_cells):
 def _within_region_links(field, region, links):
     """Per axis, the (lower, upper) disks linked inside one region."""
     out = []
+    n = field.max_solutions
     for lo, up, match in links:
         rows, slots = np.nonzero(match >= 0)
         same = (region[lo[rows]] == region[up[rows]]) & (region[lo[rows]] > 0)
         rows, slots = rows[same], slots[same]
-        out.append((lo[rows] * MAX_SOLUTIONS + slots,
-                    up[rows] * MAX_SOLUTIONS + match[rows, slots].astype(np.int64)))
+        out.append((lo[rows] * n + slots, up[rows] * n + match[rows, slots].astype(np.int64)))
     return out
 
 
@@ -240,9 +274,10 @@ def _components_by_rds(valid, disk_links, dimension):
 def _number_patches(field, region, component):
     """Patch id of every disk from its component label (rule in module doc)."""
     n_cells = field.grid.size
-    component = component.reshape(n_cells, MAX_SOLUTIONS)
-    patch = np.zeros((n_cells, MAX_SOLUTIONS), dtype=np.int32)
+    component = component.reshape(n_cells, field.max_solutions)
+    patch = np.zeros((n_cells, field.max_solutions), dtype=np.int32)
     aspect = field.aspect
+    base = 10 ** len(str(field.max_solutions))
     for r in range(1, int(region.max(initial=0)) + 1):
         cells = np.flatnonzero(region == r)
         labels = np.unique(component[cells][component[cells] >= 0])
@@ -253,11 +288,10 @@ def _number_patches(field, region, component):
             if slots.size != 1:
                 raise RuntimeError(f"sheet {label} of region {r} covers its first cell "
                                    f"{slots.size} times: region is not a trivial cover")
-            alpha = field.poses[reference, slots[0], 2]
-            keys.append((aspect[reference, slots[0]], alpha))
+            keys.append((aspect[reference, slots[0]], slots[0]))
         order = sorted(range(len(labels)), key=lambda k: keys[k])
         for layer, k in enumerate(order, start=1):
-            patch[component == labels[k]] = 10 * r + layer
+            patch[component == labels[k]] = base * r + layer
     return patch
 
 
@@ -266,8 +300,8 @@ def _absorb_unresolved(field, region, patch, links):
     unresolved = (field.valid & (region[:, None] == 0)).ravel()
     if not unresolved.any():
         return patch
-    ends = [(lo[rows] * MAX_SOLUTIONS + slots,
-             up[rows] * MAX_SOLUTIONS + match[rows, slots].astype(np.int64))
+    n = field.max_solutions
+    ends = [(lo[rows] * n + slots, up[rows] * n + match[rows, slots].astype(np.int64))
             for lo, up, match in links for rows, slots in [np.nonzero(match >= 0)]]
     a = np.concatenate([a for a, _ in ends])
     b = np.concatenate([b for _, b in ends])
@@ -285,14 +319,14 @@ def _absorb_unresolved(field, region, patch, links):
     margin = np.abs(field.margin).ravel()
     disks = np.flatnonzero(unresolved)
     candidates = {}
-    for (set_label, pid), n in zip(votes.tolist(), counts.tolist()):
-        candidates.setdefault(set_label, []).append((-n, pid))
+    for (set_label, pid), links_to in zip(votes.tolist(), counts.tolist()):
+        candidates.setdefault(set_label, []).append((-links_to, pid))
     # Where a sheet folds over itself (an S-shaped sliver), two sets continue
     # into one patch over the same cells; a patch covers a cell once, so the
     # better-conditioned set joins it first and the other tries its next patch.
     sets = {k: disks[label[disks] == k] for k in candidates}
     for set_label in sorted(sets, key=lambda k: (-margin[sets[k]].min(), k)):
-        cells, slots = np.divmod(sets[set_label], MAX_SOLUTIONS)
+        cells, slots = np.divmod(sets[set_label], n)
         if np.unique(cells).size != cells.size:
             continue
         for _, pid in sorted(candidates[set_label]):
@@ -331,18 +365,22 @@ def _describe_patches(field, region, patch, links):
     bounds = np.flatnonzero(np.diff(ids)) + 1
     aspect = field.aspect
     patches = {}
+    layers = {}
     for cells, slots in zip(np.split(cells_all, bounds), np.split(slots_all, bounds)):
         if cells.size == 0:
             continue
         pid = int(patch[cells[0], slots[0]])
         aspects = np.unique(aspect[cells, slots])
         if aspects.size != 1:
-            raise RuntimeError(f"patch {pid} mixes aspects {aspects}")
-        own_region = cells[region[cells] == pid // 10]
+            raise InvalidInputError(f"patch {pid} mixes aspects {aspects}")
+        # Its own cells share its region; cells it took from unresolved sets have 0.
+        own = int(region[cells].max())
+        layers.setdefault(own, []).append(pid)
         patches[pid] = Patch(
-            id=pid, region=pid // 10, layer=pid % 10, aspect=int(aspects[0]),
-            n_solutions=int(field.count[own_region[0]]), cells=cells, slots=slots,
-            gate_cells=of_patch(gate_keys, pid), singular_cells=of_patch(singular_keys, pid))
+            id=pid, region=own, layer=len(layers[own]), aspect=int(aspects[0]),
+            n_solutions=int(field.count[cells[region[cells] == own][0]]), cells=cells,
+            slots=slots, gate_cells=of_patch(gate_keys, pid),
+            singular_cells=of_patch(singular_keys, pid))
     return patches
 
 
@@ -355,15 +393,19 @@ def _inverse(match):
 
 
 def _gates(field, patch, links):
-    faces = {}
-    for lo, up, match in links:
+    faces, widths = {}, {}
+    steps = np.array(field.grid.steps)
+    for axis, (lo, up, match) in enumerate(links):
+        # A face across this axis spans the steps of all the others.
+        measure = float(np.prod(np.delete(steps, axis)))
         rows, slots = np.nonzero(match >= 0)
         a = patch[lo[rows], slots]
         b = patch[up[rows], match[rows, slots].astype(np.int64)]
         crossing = (a > 0) & (b > 0) & (a != b)
-        for pa, pb, ca, cb in zip(a[crossing], b[crossing], lo[rows][crossing], up[rows][crossing]):
+        for pa, pb, ca, cb in zip(a[crossing], b[crossing], lo[rows][crossing],
+                                  up[rows][crossing]):
             key = (int(min(pa, pb)), int(max(pa, pb)))
             faces.setdefault(key, []).append((ca, cb) if pa < pb else (cb, ca))
-    step = field.grid.step
-    return {key: Gate(patches=key, faces=np.array(sorted(v), dtype=np.int64), width=len(v) * step)
+            widths[key] = widths.get(key, 0.0) + measure
+    return {key: Gate(patches=key, faces=np.array(sorted(v), dtype=np.int64), width=widths[key])
             for key, v in sorted(faces.items())}

@@ -1,4 +1,22 @@
-"""Inverse and direct kinematics, Jacobians, aspects and degeneracy of the 3-RPR.
+"""The planar 3-RPR: its geometry, and its kinematics as a :class:`Mechanism`.
+
+The geometry of a planar 3-RPR manipulator as an immutable value.
+
+The paper (section 4) gives A1 = (0, 0), A2 = (15.91, 0), A3 = (0, 10),
+d1 = 17.04, d3 = 20.84 and prints beta = 37 deg.  With beta = 37 deg none of
+the paper's own example configurations is a direct-kinematic solution (the
+closest root misses (12, 18, 122.82 deg) by several degrees).  The geometry is
+the literature's classic one (Innocenti and Parenti-Castelli; Zein, Wenger and
+Chablat), whose platform triangle has sides d1 = 17.04, d2 = 16.54 and
+d3 = 20.84; the angle at B1 between B1B2 and B1B3 is then
+
+    beta = arccos((d1**2 + d3**2 - d2**2) / (2 d1 d3)) = 0.8824 rad = 50.56 deg,
+
+and with it all four example configurations of the paper come out within
+0.01 deg (see ``test_paper_examples_are_direct_kinematic_solutions``).  The
+default :data:`PAPER_GEOMETRY` therefore uses that beta.
+
+Inverse and direct kinematics, Jacobians, aspects and degeneracy of the 3-RPR.
 
 Conventions (paper section 4.1): the platform pose is ``(x, y, alpha)`` with
 ``B1 = (x, y)``, ``B2 = B1 + d1 (cos alpha, sin alpha)`` and
@@ -17,15 +35,20 @@ configurations; the roots come from the eigenvalues of a companion matrix in
 no root sits near ``t = inf``.
 """
 
+from dataclasses import dataclass
 import functools
 import math
+import numbers
 
 import numpy as np
 
-from .exceptions import InvalidInputError
-from .geometry import PAPER_GEOMETRY
+from ..exceptions import InvalidInputError
+from .base import Mechanism, register_mechanism
 
 __all__ = [
+    "Geometry",
+    "PAPER_GEOMETRY",
+    "beta_from_sides",
     "MAX_SOLUTIONS",
     "wrap_angle",
     "inverse_kinematics",
@@ -42,6 +65,156 @@ __all__ = [
 ]
 
 MAX_SOLUTIONS = 6
+
+
+def _real(value):
+    """``float(value)`` for real numbers only (no strings)."""
+    if not isinstance(value, numbers.Real):
+        raise TypeError(f"not a real number: {value!r}")
+    return float(value)
+
+
+def beta_from_sides(d1, d2, d3):
+    """Platform angle at B1 of a triangle with sides ``d1 = |B1B2|``,
+    ``d2 = |B2B3|`` and ``d3 = |B1B3|``.
+
+    Parameters
+    ----------
+    d1, d2, d3 : float
+        Side lengths [length unit]; must satisfy the triangle inequality.
+
+    Returns
+    -------
+    float
+        beta [rad] in (0, pi).
+    """
+    sides = (d1, d2, d3)
+    if not all(math.isfinite(s) and s > 0 for s in sides):
+        raise InvalidInputError(f"platform sides must be finite and positive, got {sides}")
+    cos_beta = (d1 * d1 + d3 * d3 - d2 * d2) / (2.0 * d1 * d3)
+    if not -1.0 < cos_beta < 1.0:
+        raise InvalidInputError(f"sides {sides} do not form a triangle")
+    return math.acos(cos_beta)
+
+
+@register_mechanism("3-RPR")
+@dataclass(frozen=True)
+class Geometry(Mechanism):
+    """Base points and platform of a 3-RPR manipulator: the 3-RPR mechanism.
+
+    Joints are the leg lengths ``(rho1, rho2, rho3)`` [length unit], poses
+    ``(x, y, alpha)`` [length unit, length unit, rad]; the methods of
+    :class:`~rpr3_gwr_core.mechanisms.base.Mechanism` are this module's
+    kinematics.
+
+    Attributes
+    ----------
+    a1, a2, a3 : tuple of float, shape (2,)
+        Base joint positions A1..A3 [length unit].
+    d1 : float
+        Platform side B1B2 [length unit].
+    d3 : float
+        Platform side B1B3 [length unit].
+    beta : float
+        Angle at B1 from B1B2 to B1B3 [rad].
+    """
+
+    a1: tuple = (0.0, 0.0)
+    a2: tuple = (15.91, 0.0)
+    a3: tuple = (0.0, 10.0)
+    d1: float = 17.04
+    d3: float = 20.84
+    beta: float = beta_from_sides(17.04, 16.54, 20.84)
+
+    joint_names = ("rho1", "rho2", "rho3")
+    pose_names = ("x", "y", "alpha")
+    angular = (False, False, True)
+    mode_coordinate = 2
+    max_solutions = MAX_SOLUTIONS
+
+    def __post_init__(self):
+        for name in ("a1", "a2", "a3"):
+            try:
+                point = tuple(_real(v) for v in getattr(self, name))
+            except (TypeError, ValueError):
+                raise InvalidInputError(
+                    f"{name} must be two numbers, got {getattr(self, name)!r}") from None
+            if len(point) != 2 or not all(math.isfinite(v) for v in point):
+                raise InvalidInputError(f"{name} must be two finite numbers, got {point}")
+            object.__setattr__(self, name, point)
+        for name in ("d1", "d3", "beta"):
+            try:
+                value = _real(getattr(self, name))
+            except (TypeError, ValueError):
+                raise InvalidInputError(
+                    f"{name} must be a number, got {getattr(self, name)!r}") from None
+            if not math.isfinite(value):
+                raise InvalidInputError(f"{name} must be finite, got {value}")
+            object.__setattr__(self, name, value)
+        if self.d1 <= 0 or self.d3 <= 0:
+            raise InvalidInputError("platform sides d1 and d3 must be positive")
+        # A flat platform (beta = 0 or pi) makes every pose degenerate.
+        if abs(math.sin(self.beta)) < 1e-9:
+            raise InvalidInputError(f"beta = {self.beta} makes the platform flat")
+
+    @property
+    def d2(self):
+        """Platform side B2B3 [length unit]."""
+        return math.sqrt(self.d1**2 + self.d3**2 - 2 * self.d1 * self.d3 * math.cos(self.beta))
+
+    @property
+    def base(self):
+        """Base points as an array, shape (3, 2) [length unit]."""
+        return np.array([self.a1, self.a2, self.a3])
+
+    @property
+    def scale(self):
+        """Characteristic length (longest platform side) used to make the
+        orientation column of the Jacobian commensurable with positions."""
+        return max(self.d1, self.d2, self.d3)
+
+    def to_dict(self):
+        """Plain-data form, for JSON, messages and cache keys."""
+        return {"kind": self.kind, "a1": list(self.a1), "a2": list(self.a2),
+                "a3": list(self.a3), "d1": self.d1, "d3": self.d3, "beta": self.beta}
+
+    @classmethod
+    def from_dict(cls, data):
+        """Inverse of :meth:`to_dict`."""
+        try:
+            return cls(a1=tuple(data["a1"]), a2=tuple(data["a2"]), a3=tuple(data["a3"]),
+                       d1=data["d1"], d3=data["d3"], beta=data["beta"])
+        except (KeyError, TypeError) as exc:
+            raise InvalidInputError(f"malformed geometry: {exc}") from exc
+
+    # The Mechanism interface, served by the functions below.
+
+    def check_joints(self, joints):
+        _as_rho(joints)
+
+    def inverse(self, poses):
+        return inverse_kinematics(poses, self)
+
+    def solve(self, joints):
+        return direct_kinematics_batch(joints, self)
+
+    def margin(self, poses):
+        return _singularity_margin(np.asarray(poses, dtype=float), self)
+
+    def predict(self, poses, joints_from, joints_to):
+        return _predict(poses, joints_from, joints_to, self)
+
+    def correct(self, poses, joints, iterations):
+        return _newton(poses, joints, self, iterations)
+
+    def residual(self, poses, joints):
+        return _residuals(np.asarray(poses, dtype=float), np.asarray(joints, dtype=float), self)
+
+    def step(self, pose, joints_from, joints_to):
+        return _step(self, pose, joints_from, joints_to)
+
+
+PAPER_GEOMETRY = Geometry()
 
 # A root of the sextic is real when its orientation's imaginary part is below
 # this; a double root splits into a pair whose imaginary parts are of order
@@ -149,13 +322,22 @@ def _parallel_jacobian(pose, geometry):
                            np.stack([u3x, u3y, w3], -1)], -2)
 
 
+# The constraint equations are written once, as arithmetic on arrays or on
+# floats: batches (the field, continuity) pass numpy's cos and sin, the
+# sequential continuation of one pose (validator, driver) math's, which is
+# many times faster than numpy on single values.
+
 def _rows(pose, geometry):
+    """Entries of ``Jx / 2`` of poses ``(..., 3)`` (see :func:`_row_terms`)."""
+    return _row_terms(pose[..., 0], pose[..., 1], pose[..., 2], geometry, np.cos, np.sin)
+
+
+def _row_terms(x, y, alpha, geometry, cos, sin):
     """Entries of ``Jx / 2``: legs ``u_i = B_i - A_i`` and ``w_i = u_i . dB_i/dalpha``
     (``w_1 = 0`` because B1 is the platform's reference point)."""
-    x, y, alpha = pose[..., 0], pose[..., 1], pose[..., 2]
     (a1x, a1y), (a2x, a2y), (a3x, a3y) = geometry.a1, geometry.a2, geometry.a3
-    c, s = np.cos(alpha), np.sin(alpha)
-    c3, s3 = np.cos(alpha + geometry.beta), np.sin(alpha + geometry.beta)
+    c, s = cos(alpha), sin(alpha)
+    c3, s3 = cos(alpha + geometry.beta), sin(alpha + geometry.beta)
     u1x, u1y = x - a1x, y - a1y
     u2x, u2y = x + geometry.d1 * c - a2x, y + geometry.d1 * s - a2y
     u3x, u3y = x + geometry.d3 * c3 - a3x, y + geometry.d3 * s3 - a3y
@@ -168,15 +350,44 @@ def _det_rows(u1x, u1y, u2x, u2y, w2, u3x, u3y, w3):
     return u1x * (u2y * w3 - w2 * u3y) + u1y * (w2 * u3x - u2x * w3)
 
 
+def _adjugate_product(rows, r1, r2, r3):
+    """``det(Jx / 2) (Jx / 2)^-1 r`` and ``det(Jx / 2)``."""
+    a, b, c, d, e, f, g, h = rows
+    return (((d * h - e * g) * r1 - b * h * r2 + b * e * r3,
+             (e * f - c * h) * r1 + a * h * r2 - a * e * r3,
+             (c * g - d * f) * r1 + (b * f - a * g) * r2 + (a * d - b * c) * r3),
+            _det_rows(*rows))
+
+
 def _solve_rows(rows, r1, r2, r3):
     """``(Jx / 2)^-1 r`` by the adjugate of the rows; a singular system gives 0."""
-    a, b, c, d, e, f, g, h = rows
-    det = _det_rows(*rows)
+    (dx, dy, da), det = _adjugate_product(rows, r1, r2, r3)
     inv = np.where(det != 0, 1.0 / np.where(det != 0, det, 1.0), 0.0)
-    dx = ((d * h - e * g) * r1 - b * h * r2 + b * e * r3) * inv
-    dy = ((e * f - c * h) * r1 + a * h * r2 - a * e * r3) * inv
-    da = ((c * g - d * f) * r1 + (b * f - a * g) * r2 + (a * d - b * c) * r3) * inv
-    return np.stack([dx, dy, da], axis=-1)
+    return np.stack([dx * inv, dy * inv, da * inv], axis=-1)
+
+
+def _leg_residuals(rows, rho):
+    """``|B_i - A_i|**2 - rho_i**2`` from the rows, one per leg."""
+    u1x, u1y, u2x, u2y, _, u3x, u3y, _ = rows
+    return (u1x * u1x + u1y * u1y - rho[0] * rho[0], u2x * u2x + u2y * u2y - rho[1] * rho[1],
+            u3x * u3x + u3y * u3y - rho[2] * rho[2])
+
+
+def _row_norms(rows, scale, sqrt, hypot):
+    """Norms of the rows of ``Jx / 2`` with the orientation column over ``scale``."""
+    u1x, u1y, u2x, u2y, w2, u3x, u3y, w3 = rows
+    w2, w3 = w2 / scale, w3 / scale
+    return (hypot(u1x, u1y), sqrt(u2x * u2x + u2y * u2y + w2 * w2),
+            sqrt(u3x * u3x + u3y * u3y + w3 * w3))
+
+
+def _normalised_det(rows, norms, scale):
+    """det of the rows divided by their norms: normalising before the
+    determinant keeps tiny legs from underflowing the product of the norms."""
+    u1x, u1y, u2x, u2y, w2, u3x, u3y, w3 = rows
+    n1, n2, n3 = norms
+    return _det_rows(u1x / n1, u1y / n1, u2x / n2, u2y / n2, w2 / scale / n2,
+                     u3x / n3, u3y / n3, w3 / scale / n3)
 
 
 def serial_jacobian(rho):
@@ -208,17 +419,16 @@ def singularity_margin(pose, geometry=PAPER_GEOMETRY):
 
 
 def _singularity_margin(pose, geometry):
-    u1x, u1y, u2x, u2y, w2, u3x, u3y, w3 = _rows(pose, geometry)
-    w2, w3 = w2 / geometry.scale, w3 / geometry.scale
-    n1 = np.hypot(u1x, u1y)
-    n2 = np.sqrt(u2x**2 + u2y**2 + w2**2)
-    n3 = np.sqrt(u3x**2 + u3y**2 + w3**2)
-    # Normalising the rows before the determinant keeps tiny legs from
-    # underflowing the product of the norms.
+    rows = _rows(pose, geometry)
+    norms = _row_norms(rows, geometry.scale, np.sqrt, np.hypot)
     with np.errstate(invalid="ignore", divide="ignore"):
-        margin = _det_rows(u1x / n1, u1y / n1, u2x / n2, u2y / n2, w2 / n2,
-                           u3x / n3, u3y / n3, w3 / n3)
-    return np.where((n1 > 0) & (n2 > 0) & (n3 > 0), margin, 0.0)
+        margin = _normalised_det(rows, norms, geometry.scale)
+    return np.where((norms[0] > 0) & (norms[1] > 0) & (norms[2] > 0), margin, 0.0)
+
+
+def _scalar_margin(rows, scale):
+    norms = _row_norms(rows, scale, math.sqrt, math.hypot)
+    return _normalised_det(rows, norms, scale) if min(norms) > 0 else 0.0
 
 
 def aspect(pose, geometry=PAPER_GEOMETRY):
@@ -257,13 +467,10 @@ def newton_correct(pose, rho, geometry=PAPER_GEOMETRY, iterations=3):
 
 
 def _newton(pose, rho, geometry, iterations):
-    rho_sq = rho**2
+    legs = np.moveaxis(rho, -1, 0)
     for _ in range(iterations):
         rows = _rows(pose, geometry)
-        u1x, u1y, u2x, u2y, _, u3x, u3y, _ = rows
-        pose = pose - 0.5 * _solve_rows(rows, u1x**2 + u1y**2 - rho_sq[..., 0],
-                                        u2x**2 + u2y**2 - rho_sq[..., 1],
-                                        u3x**2 + u3y**2 - rho_sq[..., 2])
+        pose = pose - 0.5 * _solve_rows(rows, *_leg_residuals(rows, legs))
     return pose
 
 
@@ -271,6 +478,36 @@ def _predict(pose, rho_from, rho_to, geometry):
     """Euler step of the platform for a change of legs: ``Jx dx = Jq drho``."""
     drho = rho_to - rho_from
     return pose + _solve_rows(_rows(pose, geometry), *np.moveaxis(rho_from * drho, -1, 0))
+
+
+# The scalar continuation step: converged when every leg's residual is below
+# _RESIDUAL_TOL * scale**2, after at most _NEWTON_STEPS corrector steps.
+_NEWTON_STEPS = 6
+_RESIDUAL_TOL = 1e-9
+
+
+def _step(geometry, pose, rho_from, rho_to):
+    """One predictor-corrector step of one pose (:meth:`Geometry.step`)."""
+    x, y, alpha = (float(v) for v in pose)
+    r1, r2, r3 = (float(v) for v in rho_from)
+    target = tuple(float(v) for v in rho_to)
+    t1, t2, t3 = target
+    rows = _row_terms(x, y, alpha, geometry, math.cos, math.sin)
+    (dx, dy, da), det = _adjugate_product(rows, r1 * (t1 - r1), r2 * (t2 - r2), r3 * (t3 - r3))
+    if det == 0.0:
+        return None
+    x, y, alpha = x + dx / det, y + dy / det, alpha + da / det
+    tol = _RESIDUAL_TOL * geometry.scale**2
+    for _ in range(_NEWTON_STEPS):
+        rows = _row_terms(x, y, alpha, geometry, math.cos, math.sin)
+        residual = _leg_residuals(rows, target)
+        if max(abs(v) for v in residual) < tol:
+            return (x, y, alpha), _scalar_margin(rows, geometry.scale)
+        (dx, dy, da), det = _adjugate_product(rows, *residual)
+        if det == 0.0:
+            return None
+        x, y, alpha = x - 0.5 * dx / det, y - 0.5 * dy / det, alpha - 0.5 * da / det
+    return None
 
 
 # --- direct kinematics ---------------------------------------------------------
@@ -473,9 +710,7 @@ def _solve(rho, geometry):
 
 
 def _residuals(pose, rho, geometry):
-    u1x, u1y, u2x, u2y, _, u3x, u3y, _ = _rows(pose, geometry)
-    return np.stack([u1x**2 + u1y**2 - rho[..., 0] ** 2, u2x**2 + u2y**2 - rho[..., 1] ** 2,
-                     u3x**2 + u3y**2 - rho[..., 2] ** 2], axis=-1)
+    return np.stack(_leg_residuals(_rows(pose, geometry), np.moveaxis(rho, -1, 0)), axis=-1)
 
 
 def _degenerate_poses(rho, alpha, row, big_a, big_b, big_d, big_e, g, h, geometry):
@@ -552,3 +787,4 @@ def degenerate_orientations(geometry=PAPER_GEOMETRY):
     phase = math.atan2(s1, c1)
     offset = math.acos(-c0 / amplitude)
     return np.sort(wrap_angle(np.array([phase + offset, phase - offset])))
+

@@ -9,9 +9,9 @@ from dataclasses import dataclass
 from time import perf_counter
 
 import networkx as nx
+import numpy as np
 
-from .field import PAPER_GRID, compute_field
-from .geometry import PAPER_GEOMETRY
+from .field import compute_field
 from .segmentation import segment
 
 __all__ = ["Roadmap", "build_roadmap", "roadmap_graph", "aspect_groups"]
@@ -42,8 +42,9 @@ class Roadmap:
         return self.segmentation.field
 
     @property
-    def geometry(self):
-        return self.segmentation.field.geometry
+    def mechanism(self):
+        """The mechanism the roadmap was built for."""
+        return self.segmentation.field.mechanism
 
     @property
     def grid(self):
@@ -61,12 +62,12 @@ def roadmap_graph(segmentation):
     -------
     networkx.Graph
     """
-    cell_area = segmentation.field.grid.step ** 2
+    cell_volume = float(np.prod(segmentation.field.grid.steps))
     graph = nx.Graph()
     for pid, patch in segmentation.patches.items():
         graph.add_node(pid, region=patch.region, layer=patch.layer, aspect=patch.aspect,
                        n_solutions=patch.n_solutions, n_cells=int(patch.cells.size),
-                       area=float(patch.cells.size * cell_area))
+                       area=float(patch.cells.size * cell_volume))
     for (a, b), gate in segmentation.gates.items():
         graph.add_edge(a, b, width=float(gate.width), n_faces=int(len(gate.faces)))
     return graph
@@ -78,16 +79,16 @@ def aspect_groups(graph):
     return sorted((sorted(c) for c in nx.connected_components(graph)), key=lambda c: c[0])
 
 
-def build_roadmap(geometry=PAPER_GEOMETRY, grid=PAPER_GRID, method="components",
-                  min_region_cells=8, progress=None):
-    """Build the global workspace roadmap of a geometry on a grid.
+def build_roadmap(mechanism, grid, method="components", min_region_cells=8, progress=None):
+    """Build the global workspace roadmap of a mechanism on a grid.
 
     Parameters
     ----------
-    geometry : Geometry
+    mechanism : Mechanism
     grid : Grid
+        Over the mechanism's joints, of any dimension.
     method : {"components", "rds"}
-        Patch search (see :func:`~rpr3_gwr_core.segmentation.segment`).
+        Patch search (see :func:`~rpr3_gwr_core.workspace.segmentation.segment`).
     min_region_cells : int
         Smallest set of cells that counts as a region.
     progress : callable, optional
@@ -96,12 +97,24 @@ def build_roadmap(geometry=PAPER_GEOMETRY, grid=PAPER_GRID, method="components",
     Returns
     -------
     Roadmap
+
+    Examples
+    --------
+    The paper's roadmap at rho1 = 17 (section 5.1), on a grid four times
+    coarser than its 401 x 401:
+
+    >>> from rpr3_gwr_core import PAPER_GEOMETRY, build_roadmap, rho1_slice
+    >>> roadmap = build_roadmap(PAPER_GEOMETRY, rho1_slice(17.0, step=0.5))
+    >>> roadmap.segmentation.n_regions, len(roadmap.segmentation.patches)
+    (7, 24)
+    >>> [len(group) for group in aspect_groups(roadmap.graph)]
+    [12, 12]
     """
     report = progress or (lambda stage, fraction: None)
     timings = {}
     start = perf_counter()
     report("n-solution field", 0.0)
-    field = compute_field(geometry, grid)
+    field = compute_field(mechanism, grid)
     timings["field"] = perf_counter() - start
     report("regions, patches and gates", 0.4)
     start = perf_counter()

@@ -27,13 +27,13 @@ import time
 
 import numpy as np
 
+from ..exceptions import GWRError, InvalidInputError
+from ..mechanisms import mechanism_from_dict
+from ..mechanisms.rpr3 import aspect, direct_kinematics
+from ..paper import PAPER_GEOMETRY, rho1_slice
+from ..planning import PlanOptions, Planner
+from ..workspace import Grid, build_roadmap
 from .cache import cached_roadmap, default_cache_dir
-from .exceptions import GWRError, InvalidInputError
-from .field import Grid
-from .geometry import PAPER_GEOMETRY, Geometry
-from .kinematics import aspect, direct_kinematics
-from .planner import PlanOptions, Planner
-from .roadmap import build_roadmap
 
 __all__ = ["main"]
 
@@ -120,8 +120,7 @@ def _dk(args):
 def _roadmap(args):
     from .export import roadmap_summary, roadmap_to_gexf, roadmap_to_json
 
-    grid = Grid(rho1=args.rho1, rho2_range=tuple(args.rho2), rho3_range=tuple(args.rho3),
-                step=args.step)
+    grid = rho1_slice(args.rho1, tuple(args.rho2), tuple(args.rho3), args.step)
     start = time.perf_counter()
     roadmap = build_roadmap(PAPER_GEOMETRY, grid, method=args.method,
                             progress=_Progress(sys.stderr))
@@ -144,15 +143,15 @@ def _roadmap(args):
 
 
 def _plan(args):
-    grid = Grid(rho1=args.rho1)
+    grid = rho1_slice(args.rho1)
     roadmap, _ = cached_roadmap(PAPER_GEOMETRY, grid, args.cache_dir, _Progress(sys.stderr))
     options = PlanOptions(smooth=args.smooth, weighted=args.weighted,
                           feasibility_only=args.feasibility_only,
                           max_velocity=args.max_velocity, max_acceleration=args.max_acceleration,
-                          alpha_tol=math.radians(args.alpha_tol_deg))
+                          mode_tol=math.radians(args.alpha_tol_deg))
     start = (args.rho1, args.start[0], args.start[1], math.radians(args.start[2]))
     goal = (args.rho1, args.goal[0], args.goal[1], math.radians(args.goal[2]))
-    header = {"roadmap": {"geometry": PAPER_GEOMETRY.to_dict(), "grid": grid.to_dict()},
+    header = {"roadmap": {"mechanism": PAPER_GEOMETRY.to_dict(), "grid": grid.to_dict()},
               "request": {"start": list(start), "goal": list(goal)}}
     begin = time.perf_counter()
     try:
@@ -175,14 +174,14 @@ def _plot(args):
     with open(args.plan_file, encoding="utf-8") as stream:
         try:
             plan = json.load(stream)
-            geometry = Geometry.from_dict(plan["roadmap"]["geometry"])
+            mechanism = mechanism_from_dict(plan["roadmap"]["mechanism"])
             grid = Grid.from_dict(plan["roadmap"]["grid"])
         except (json.JSONDecodeError, KeyError, TypeError) as exc:
             raise InvalidInputError(f"{args.plan_file} is not a plan written by 'rpr3-gwr plan'"
                                     f" ({exc})") from None
     if "error" in plan or not plan.get("waypoints"):
         raise InvalidInputError(f"{args.plan_file} holds no trajectory to draw")
-    roadmap, _ = cached_roadmap(geometry, grid, args.cache_dir, _Progress(sys.stderr))
+    roadmap, _ = cached_roadmap(mechanism, grid, args.cache_dir, _Progress(sys.stderr))
     output = args.output or os.path.splitext(args.plan_file)[0] + ".png"
     plan_figure(roadmap, plan).savefig(output, dpi=110)
     return {"figure": output}, 0

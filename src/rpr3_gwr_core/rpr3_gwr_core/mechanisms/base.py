@@ -1,0 +1,214 @@
+"""The mechanism interface: everything the roadmap, the planner and the
+validator know of a parallel mechanism.
+
+A mechanism relates its actuated joints ``q`` (shape ``(n_joints,)``) and its
+platform pose ``x`` (shape ``(pose_size,)``) by constraint equations
+``F(q, x) = 0``; the direct kinematics has at most ``max_solutions`` poses per
+``q``.  Like OMPL's state space, it is an object of its own, separate from
+the roadmap built over its joints and from the planner that uses both.
+
+Vectorised methods take arrays with any leading shape; :meth:`Mechanism.step`
+is the scalar predictor-corrector step that sequential continuation (the
+validator, the driver) takes thousands of times, so implementations serve it
+from the same equations evaluated on floats.
+"""
+
+import abc
+import math
+
+import numpy as np
+
+from ..exceptions import InvalidInputError
+
+__all__ = ["Mechanism", "mechanism_from_dict", "register_mechanism"]
+
+_REGISTRY = {}
+
+
+def register_mechanism(kind):
+    """Class decorator: make ``mechanism_from_dict`` rebuild ``kind`` documents."""
+    def register(cls):
+        _REGISTRY[kind] = cls
+        cls.kind = kind
+        return cls
+    return register
+
+
+def mechanism_from_dict(data):
+    """Rebuild a mechanism from :meth:`Mechanism.to_dict`'s plain data.
+
+    Raises
+    ------
+    InvalidInputError
+        If the kind is unknown or its parameters malformed.
+    """
+    kind = data.get("kind") if isinstance(data, dict) else None
+    if kind not in _REGISTRY:
+        raise InvalidInputError(f"unknown mechanism kind {kind!r}; known: {sorted(_REGISTRY)}")
+    return _REGISTRY[kind].from_dict(data)
+
+
+class Mechanism(abc.ABC):
+    """A parallel mechanism: joints, poses and the equations between them.
+
+    Attributes
+    ----------
+    kind : str
+        Name of the mechanism in documents and messages.
+    joint_names : tuple of str
+        One per actuated joint.
+    pose_names : tuple of str
+        One per pose coordinate.
+    angular : tuple of bool
+        Which pose coordinates are angles [rad], compared modulo 2 pi.
+    mode_coordinate : int
+        The pose coordinate a request gives, beside the joints, to choose an
+        assembly mode (the nearest solution in it is taken).
+    max_solutions : int
+        Most direct-kinematic solutions of one joint vector.
+    scale : float
+        Length that makes angles commensurable with positions [length unit].
+    """
+
+    kind = "abstract"
+    joint_names = ()
+    pose_names = ()
+    angular = ()
+    mode_coordinate = 0
+    max_solutions = 0
+
+    @property
+    def n_joints(self):
+        """Number of actuated joints."""
+        return len(self.joint_names)
+
+    @property
+    def pose_size(self):
+        """Number of pose coordinates."""
+        return len(self.pose_names)
+
+    @property
+    @abc.abstractmethod
+    def scale(self):
+        """Characteristic length [length unit]."""
+
+    @abc.abstractmethod
+    def inverse(self, poses):
+        """Joints of poses: ``(..., pose_size)`` to ``(..., n_joints)``."""
+
+    @abc.abstractmethod
+    def solve(self, joints):
+        """All real direct-kinematic solutions of many joint vectors.
+
+        Parameters
+        ----------
+        joints : ndarray, shape (n, n_joints)
+
+        Returns
+        -------
+        count : ndarray of uint8, shape (n,)
+        poses : ndarray, shape (n, max_solutions, pose_size)
+            Sorted in a fixed order per joint vector, NaN beyond ``count``.
+        """
+
+    @abc.abstractmethod
+    def margin(self, poses):
+        """Signed, normalised distance from a parallel singularity, shape (...):
+        0 on one, in [-1, 1], its sign the aspect."""
+
+    @abc.abstractmethod
+    def predict(self, poses, joints_from, joints_to):
+        """Euler predictor: poses moved for a change of joints, shape of ``poses``."""
+
+    @abc.abstractmethod
+    def correct(self, poses, joints, iterations):
+        """Newton corrector on the constraint equations at fixed joints."""
+
+    @abc.abstractmethod
+    def residual(self, poses, joints):
+        """Constraint residuals ``F(q, x)``, shape (..., n_joints)."""
+
+    @abc.abstractmethod
+    def step(self, pose, joints_from, joints_to):
+        """One predictor-corrector step of one pose (sequences of floats).
+
+        Returns
+        -------
+        (tuple of float, float) or None
+            The pose at ``joints_to`` and its margin, or None when the
+            corrector does not converge.
+        """
+
+    @abc.abstractmethod
+    def to_dict(self):
+        """Plain data with a ``"kind"`` key, for JSON, messages and cache keys."""
+
+    def check_joints(self, joints):
+        """Raise ``InvalidInputError`` for joint values the mechanism cannot take.
+
+        The default accepts any finite values.
+        """
+        if not np.all(np.isfinite(joints)):
+            raise InvalidInputError(f"joints must be finite, got {np.asarray(joints).tolist()}")
+
+    def aspect(self, poses):
+        """``sign(margin)``: +1 or -1, 0 exactly on a singularity, int8, shape (...)."""
+        return np.sign(self.margin(poses)).astype(np.int8)
+
+    def wrap(self, poses):
+        """Poses with their angles wrapped to (-pi, pi]."""
+        poses = np.array(poses, dtype=float)
+        for k in np.flatnonzero(self.angular):
+            poses[..., k] = np.pi - np.remainder(np.pi - poses[..., k], 2 * np.pi)
+        return poses
+
+    def pose_difference(self, a, b):
+        """``a - b`` with angles wrapped and measured as arc length at ``scale``."""
+        difference = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)
+        for k in np.flatnonzero(self.angular):
+            difference[..., k] = (np.pi - np.remainder(np.pi - difference[..., k], 2 * np.pi)) \
+                * self.scale
+        return difference
+
+    def pose_distance(self, a, b):
+        """Euclidean norm of :meth:`pose_difference` [length unit], shape (...)."""
+        return np.linalg.norm(self.pose_difference(a, b), axis=-1)
+
+    def follow(self, pose, joints_from, joints_to, substeps=1, max_halvings=8):
+        """Carry a pose from ``joints_from`` to ``joints_to`` in ``substeps``
+        equal steps, halving a step where the corrector fails.
+
+        Returns
+        -------
+        (tuple of float, float, float) or None
+            The final pose and its margin, and the margin of smallest
+            magnitude met on the way, or of the other sign if the margin
+            changed sign (so ``sign(extreme) != sign(margin at the start)``
+            tells a crossed singularity); None when the platform cannot
+            follow.
+        """
+        pose = tuple(float(v) for v in pose)
+        joints_from = np.asarray(joints_from, dtype=float)
+        joints_to = np.asarray(joints_to, dtype=float)
+        done, h = 0.0, 1.0 / substeps
+        smallest = h / 2**max_halvings
+        margin = extreme = float(self.margin(np.array(pose)))
+        while done < 1.0:
+            h = min(h, 1.0 - done)
+            out = self.step(pose, joints_from + (joints_to - joints_from) * done,
+                            joints_from + (joints_to - joints_from) * (done + h))
+            if out is None:
+                if h < smallest:
+                    return None
+                h /= 2
+                continue
+            pose, margin = out
+            if (margin > 0) != (extreme > 0) or abs(margin) < abs(extreme):
+                extreme = margin
+            done += h
+        return pose, margin, extreme
+
+    def wrap_scalar(self, pose):
+        """One pose (sequence of floats) with its angles wrapped, as a tuple."""
+        return tuple(math.atan2(math.sin(v), math.cos(v)) if angle else float(v)
+                     for v, angle in zip(pose, self.angular))

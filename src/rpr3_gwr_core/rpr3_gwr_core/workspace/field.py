@@ -1,0 +1,99 @@
+"""The n-solution field: every direct-kinematic solution of every grid cell.
+
+The grid (:mod:`~rpr3_gwr_core.workspace.grid`) discretises the
+configuration space, or a slice of it (paper section 5: rho2, rho3 in
+[0, 50], step 0.125, 401 x 401 cells at rho1 = 17); the mechanism
+(:mod:`~rpr3_gwr_core.mechanisms`) solves each cell.
+"""
+
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+import os
+
+import numpy as np
+
+__all__ = ["NSolutionField", "compute_field"]
+
+
+_CHUNK = 8192
+_WORKERS = max(1, min(4, os.cpu_count() or 1))
+
+
+@dataclass(frozen=True, eq=False)
+class NSolutionField:
+    """Direct-kinematic solutions of every cell of a grid.
+
+    Attributes
+    ----------
+    mechanism : Mechanism
+    grid : Grid
+    count : ndarray of uint8, shape (n_cells,)
+        Number of real solutions of each cell.
+    poses : ndarray, shape (n_cells, max_solutions, pose_size)
+        The solutions in the mechanism's order; NaN beyond ``count``.
+    margin : ndarray, shape (n_cells, max_solutions)
+        Signed normalised distance of each solution from a parallel
+        singularity (:meth:`Mechanism.margin`); NaN beyond ``count``.
+    """
+
+    mechanism: object
+    grid: object
+    count: np.ndarray
+    poses: np.ndarray
+    margin: np.ndarray
+
+    @property
+    def max_solutions(self):
+        """Solution slots per cell."""
+        return self.margin.shape[1]
+
+    @property
+    def aspect(self):
+        """``sign(margin)`` of each solution, shape (n_cells, max_solutions), 0 where none."""
+        return np.nan_to_num(np.sign(self.margin)).astype(np.int8)
+
+    @property
+    def valid(self):
+        """Mask of existing solutions, shape (n_cells, max_solutions)."""
+        return np.arange(self.max_solutions) < self.count[:, None]
+
+
+def compute_field(mechanism, grid):
+    """Solve the direct kinematics on every cell of a grid.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+    grid : Grid
+        Over the mechanism's joints.
+
+    Returns
+    -------
+    NSolutionField
+
+    Examples
+    --------
+    >>> from rpr3_gwr_core import PAPER_GEOMETRY, Axis, Grid, compute_field
+    >>> grid = Grid(axes=(Axis(1, 10.0, 12.0, 1.0), Axis(2, 20.0, 22.0, 1.0)),
+    ...             fixed=((0, 17.0),))
+    >>> compute_field(PAPER_GEOMETRY, grid).count.tolist()
+    [2, 2, 2, 2, 2, 2, 4, 4, 4]
+    """
+    joints = grid.joints()
+    n = mechanism.max_solutions
+    count = np.empty(grid.size, dtype=np.uint8)
+    poses = np.empty((grid.size, n, mechanism.pose_size))
+    margin = np.full((grid.size, n), np.nan)
+
+    # Chunks bound the temporaries of the root finder (they scale with cells)
+    # and keep every core busy: numpy and LAPACK release the GIL.
+    def solve(start):
+        part = slice(start, start + _CHUNK)
+        count[part], poses[part] = mechanism.solve(joints[part])
+        valid = np.arange(n) < count[part, None]
+        margin[part][valid] = mechanism.margin(poses[part][valid])
+
+    with ThreadPoolExecutor(max_workers=_WORKERS) as pool:
+        list(pool.map(solve, range(0, grid.size, _CHUNK)))
+    return NSolutionField(mechanism=mechanism, grid=grid, count=count, poses=poses,
+                          margin=margin)

@@ -1,0 +1,242 @@
+"""Uniform grids over any subset of a mechanism's joints, the others fixed.
+
+A grid is a list of axes, each a joint index with a range and a step; the
+other joints keep fixed values.  The paper's grid is two axes (rho2 and rho3
+in [0, 50], step 0.125) at fixed rho1 = 17; the full 3-DOF roadmap is three
+axes.  Cells are the grid's sample points, numbered row-major over the axes
+in their order: cell ``(i, j)`` of a 2-D grid is ``i * n_1 + j``.
+"""
+
+from dataclasses import dataclass
+import math
+import numbers
+
+import numpy as np
+
+from ..exceptions import InvalidInputError, OutOfGridError
+
+__all__ = ["Axis", "Grid"]
+
+
+def _real(value, name):
+    """``float(value)`` for finite real numbers only (no strings)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise InvalidInputError(f"{name} must be a number, got {value!r}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise InvalidInputError(f"{name} must be finite, got {value}")
+    return value
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One axis of a grid.
+
+    Attributes
+    ----------
+    joint : int
+        Index of the joint it samples.
+    low, high : float
+        Inclusive range [joint unit].
+    step : float
+        Spacing of its cells [joint unit].
+    """
+
+    joint: int
+    low: float
+    high: float
+    step: float
+
+    def __post_init__(self):
+        if isinstance(self.joint, bool) or not isinstance(self.joint, numbers.Integral) \
+                or self.joint < 0:
+            raise InvalidInputError(f"an axis' joint is an index >= 0, got {self.joint!r}")
+        low, high = _real(self.low, "an axis' low end"), _real(self.high, "an axis' high end")
+        step = _real(self.step, "an axis' step")
+        if step <= 0:
+            raise InvalidInputError(f"step must be positive, got {step}")
+        if high < low:
+            raise InvalidInputError(f"an axis' range must satisfy low <= high, got ({low}, {high})")
+        object.__setattr__(self, "joint", int(self.joint))
+        for name, value in (("low", low), ("high", high), ("step", step)):
+            object.__setattr__(self, name, value)
+
+    @property
+    def count(self):
+        """Number of cells along the axis."""
+        return int(math.floor((self.high - self.low) / self.step + 1e-9)) + 1
+
+    @property
+    def values(self):
+        """Joint value of each cell along the axis, shape (count,)."""
+        return self.low + self.step * np.arange(self.count)
+
+
+@dataclass(frozen=True)
+class Grid:
+    """A uniform grid over some joints of a mechanism.
+
+    Attributes
+    ----------
+    axes : tuple of Axis
+        The sampled joints, in the order of the cell numbering.
+    fixed : tuple of (int, float)
+        ``(joint, value)`` of every joint not on an axis.
+    """
+
+    axes: tuple
+    fixed: tuple = ()
+
+    def __post_init__(self):
+        try:
+            axes = tuple(self.axes)
+            fixed = tuple((int(j), _real(v, f"fixed joint {j}")) for j, v in self.fixed)
+        except (TypeError, ValueError):
+            raise InvalidInputError(f"a grid needs axes and (joint, value) pairs, got "
+                                    f"axes={self.axes!r}, fixed={self.fixed!r}") from None
+        if not axes or not all(isinstance(a, Axis) for a in axes):
+            raise InvalidInputError("a grid needs at least one Axis")
+        joints = sorted([a.joint for a in axes] + [j for j, _ in fixed])
+        if joints != list(range(len(joints))):
+            raise InvalidInputError(f"the axes and fixed joints must name joints 0..n-1 once "
+                                    f"each, got {joints}")
+        object.__setattr__(self, "axes", axes)
+        object.__setattr__(self, "fixed", tuple(sorted(fixed)))
+
+    @classmethod
+    def regular(cls, ranges, step, fixed=None):
+        """A grid with one step on every axis.
+
+        Parameters
+        ----------
+        ranges : mapping of int to (float, float)
+            Axis joint to its inclusive ``(low, high)``, in axis order.
+        step : float
+        fixed : mapping of int to float, optional
+            The other joints' values.
+        """
+        try:
+            axes = tuple(Axis(joint, *bounds, step) for joint, bounds in ranges.items())
+        except TypeError:
+            raise InvalidInputError(f"ranges are (low, high) pairs, got {ranges!r}") from None
+        return cls(axes=axes, fixed=tuple((fixed or {}).items()))
+
+    @property
+    def ndim(self):
+        """Number of axes d."""
+        return len(self.axes)
+
+    @property
+    def n_joints(self):
+        """Number of joints of the mechanism."""
+        return len(self.axes) + len(self.fixed)
+
+    @property
+    def shape(self):
+        """Number of cells along each axis."""
+        return tuple(a.count for a in self.axes)
+
+    @property
+    def size(self):
+        """Total number of cells."""
+        return math.prod(self.shape)
+
+    @property
+    def steps(self):
+        """Step of each axis [joint unit]."""
+        return tuple(a.step for a in self.axes)
+
+    @property
+    def step(self):
+        """The smallest step [joint unit]."""
+        return min(self.steps)
+
+    @property
+    def axis_joints(self):
+        """Joint index of each axis."""
+        return tuple(a.joint for a in self.axes)
+
+    def fixed_value(self, joint):
+        """Value of a fixed joint."""
+        return dict(self.fixed)[joint]
+
+    def coordinates(self):
+        """Axis values of every cell, shape (size, ndim), row-major."""
+        mesh = np.meshgrid(*[a.values for a in self.axes], indexing="ij")
+        return np.stack([m.ravel() for m in mesh], axis=-1)
+
+    def joints(self):
+        """Joint vector of every cell, shape (size, n_joints), row-major."""
+        out = np.empty((self.size, self.n_joints))
+        out[:, list(self.axis_joints)] = self.coordinates()
+        for joint, value in self.fixed:
+            out[:, joint] = value
+        return out
+
+    def joints_of(self, cell):
+        """Joint vector of one flat cell index, shape (n_joints,)."""
+        index = np.unravel_index(int(cell), self.shape)
+        out = np.empty(self.n_joints)
+        for axis, k in zip(self.axes, index):
+            out[axis.joint] = axis.low + axis.step * k
+        for joint, value in self.fixed:
+            out[joint] = value
+        return out
+
+    def cell_of(self, joints):
+        """Flat index of the cell nearest a joint vector (its axis joints).
+
+        Raises
+        ------
+        InvalidInputError
+            If an axis joint is NaN or infinite.
+        OutOfGridError
+            If the point lies farther than half a step outside the grid.
+        """
+        values = [float(joints[a.joint]) for a in self.axes]
+        if not all(math.isfinite(v) for v in values):
+            raise InvalidInputError(f"cell_of needs finite joints, got {values}")
+        index = []
+        for value, axis in zip(values, self.axes):
+            # Compared as floats first: a huge joint value would overflow int().
+            k = (value - axis.low) / axis.step
+            if not -0.5 <= k < axis.count - 0.5:
+                raise OutOfGridError(f"{tuple(values)} lies outside the grid "
+                                     f"{[(a.low, a.high) for a in self.axes]}")
+            index.append(min(int(round(k)), axis.count - 1))
+        return int(np.ravel_multi_index(index, self.shape))
+
+    def cells_of(self, points):
+        """Flat indices of the cells nearest many points, -1 outside the grid.
+
+        Parameters
+        ----------
+        points : ndarray, shape (n, ndim)
+            Axis coordinates (not whole joint vectors).
+
+        Returns
+        -------
+        ndarray of int, shape (n,)
+        """
+        points = np.asarray(points, dtype=float)
+        index = [np.rint((points[:, k] - a.low) / a.step).astype(np.int64)
+                 for k, a in enumerate(self.axes)]
+        inside = np.all([(i >= 0) & (i < a.count) for i, a in zip(index, self.axes)], axis=0)
+        clipped = [np.clip(i, 0, a.count - 1) for i, a in zip(index, self.axes)]
+        return np.where(inside, np.ravel_multi_index(clipped, self.shape), -1)
+
+    def to_dict(self):
+        """Plain-data form, for JSON and cache keys."""
+        return {"axes": [{"joint": a.joint, "min": a.low, "max": a.high, "step": a.step}
+                         for a in self.axes],
+                "fixed": [{"joint": j, "value": v} for j, v in self.fixed]}
+
+    @classmethod
+    def from_dict(cls, data):
+        """Inverse of :meth:`to_dict`."""
+        try:
+            return cls(axes=tuple(Axis(a["joint"], a["min"], a["max"], a["step"])
+                                  for a in data["axes"]),
+                       fixed=tuple((f["joint"], f["value"]) for f in data["fixed"]))
+        except (KeyError, TypeError) as exc:
+            raise InvalidInputError(f"malformed grid: {exc}") from exc

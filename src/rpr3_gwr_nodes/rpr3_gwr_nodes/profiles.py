@@ -1,0 +1,21 @@
+"""What the suite's nodes share, as nav2's ``qos_profiles``: the QoS of each
+kind of topic, the joint names and the frame of the manipulator's base."""
+
+from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy,
+                       qos_profile_sensor_data)
+
+__all__ = ["LATCHED_QOS", "SENSOR_QOS", "JOINT_NAMES", "PASSIVE_JOINT_NAMES", "BASE_FRAME"]
+
+# Maps and roadmaps, as nav2's map server: the latest one, to late joiners too
+# (subscribers use the same profile).
+LATCHED_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
+                         reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+# Joint states, poses and markers at the control rate: the newest matters.
+SENSOR_QOS = qos_profile_sensor_data
+# The 3-RPR's actuated legs, in the core's joint order.
+JOINT_NAMES = ["rho1", "rho2", "rho3"]
+# Its passive revolute joints at the base, the legs' directions.
+PASSIVE_JOINT_NAMES = ["theta1", "theta2", "theta3"]
+# The frame of the base points A1..A3 and of every pose.
+BASE_FRAME = "base"
