@@ -10,14 +10,17 @@ paper's setting.
 
 Examples
 --------
-The paper's first example (section 5.2) on a grid twice as coarse as its own:
+The paper's first example (section 5.2) on a grid twice as coarse as its
+own: its two global paths go through regions 6, 4, 2, 1 and 6, 5, 2, 1.
 
 >>> import math
 >>> from rpr3_gwr_core import PAPER_GEOMETRY, Planner, build_roadmap, rho1_slice
->>> planner = Planner(build_roadmap(PAPER_GEOMETRY, rho1_slice(17.0, step=0.25)))
->>> plan = planner.plan((17, 12, 18, math.radians(122.82)), (17, 10, 25, math.radians(-24.24)))
->>> sorted(planner.roadmap.segmentation.patches[p].region for p in plan.global_paths[0].patches)
-[1, 2, 4, 6]
+>>> roadmap = build_roadmap(PAPER_GEOMETRY, rho1_slice(17.0, step=0.25))
+>>> plan = Planner(roadmap).plan((17, 12, 18, math.radians(122.82)),
+...                              (17, 10, 25, math.radians(-24.24)))
+>>> patches = roadmap.segmentation.patches
+>>> sorted([patches[p].region for p in path.patches] for path in plan.global_paths)
+[[6, 4, 2, 1], [6, 5, 2, 1]]
 >>> plan.validation.ok
 True
 """

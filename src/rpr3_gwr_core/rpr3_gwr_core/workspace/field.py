@@ -73,11 +73,14 @@ def compute_field(mechanism, grid):
 
     Examples
     --------
+    The number of solutions over rho2 = 10, 15, ..., 30 (rows) and
+    rho3 = 15, 20, 25 (columns) at rho1 = 17, as in the paper's figure 6:
+
     >>> from rpr3_gwr_core import PAPER_GEOMETRY, Axis, Grid, compute_field
-    >>> grid = Grid(axes=(Axis(1, 10.0, 12.0, 1.0), Axis(2, 20.0, 22.0, 1.0)),
+    >>> grid = Grid(axes=(Axis(1, 10.0, 30.0, 5.0), Axis(2, 15.0, 25.0, 5.0)),
     ...             fixed=((0, 17.0),))
-    >>> compute_field(PAPER_GEOMETRY, grid).count.tolist()
-    [2, 2, 2, 2, 2, 2, 4, 4, 4]
+    >>> compute_field(PAPER_GEOMETRY, grid).count.reshape(grid.shape).tolist()
+    [[2, 2, 2], [6, 6, 2], [4, 4, 4], [4, 2, 4], [2, 2, 2]]
     """
     joints = grid.joints()
     n = mechanism.max_solutions

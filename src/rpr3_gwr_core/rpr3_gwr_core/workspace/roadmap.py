@@ -100,11 +100,11 @@ def build_roadmap(mechanism, grid, method="components", min_region_cells=8, prog
 
     Examples
     --------
-    The paper's roadmap at rho1 = 17 (section 5.1), on a grid four times
-    coarser than its 401 x 401:
+    The paper's roadmap at rho1 = 17 (section 5.1), on a grid twice as
+    coarse as its 401 x 401: 7 regions, 24 patches, one group per aspect.
 
     >>> from rpr3_gwr_core import PAPER_GEOMETRY, build_roadmap, rho1_slice
-    >>> roadmap = build_roadmap(PAPER_GEOMETRY, rho1_slice(17.0, step=0.5))
+    >>> roadmap = build_roadmap(PAPER_GEOMETRY, rho1_slice(17.0, step=0.25))
     >>> roadmap.segmentation.n_regions, len(roadmap.segmentation.patches)
     (7, 24)
     >>> [len(group) for group in aspect_groups(roadmap.graph)]

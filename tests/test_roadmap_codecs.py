@@ -1,0 +1,71 @@
+"""A roadmap through ROS messages and through JSON comes back the same, and
+plans the same, with no DDS involved: both decoders are the core's one
+``Segmentation.from_arrays``."""
+
+import math
+
+import numpy as np
+import pytest
+from rpr3_gwr_core import PAPER_GEOMETRY, PAPER_GRID, Planner, PlanOptions, build_roadmap
+from rpr3_gwr_core.io.export import roadmap_from_json, roadmap_to_json
+from rpr3_gwr_core.exceptions import InvalidInputError
+from rpr3_gwr_nodes.conversions import roadmap_from_msgs, roadmap_to_msgs
+from std_msgs.msg import Header
+
+D = math.radians
+REQUESTS = [((17, 12, 18, D(122.82)), (17, 10, 25, D(-24.24))),
+            ((17, 20, 25, D(29.47)), (17, 20, 25, D(96.13))),
+            ((17, 32.44684871137472, 28.63922926571835, D(58.37334330639168)),
+             (17, 25.791714909487556, 14.864184868961233, D(-143.59793965686987)))]
+
+
+@pytest.fixture(scope="module")
+def built():
+    return build_roadmap(PAPER_GEOMETRY, PAPER_GRID)
+
+
+@pytest.fixture(scope="module")
+def decoded(built):
+    return {"messages": roadmap_from_msgs(*roadmap_to_msgs(built, Header(frame_id="base"))),
+            "json": roadmap_from_json(roadmap_to_json(built))}
+
+
+@pytest.mark.parametrize("codec", ["messages", "json"])
+def test_the_decoded_roadmap_is_the_built_one(built, decoded, codec):
+    a, b = built.segmentation, decoded[codec].segmentation
+    for name in ("count", "poses", "margin"):
+        np.testing.assert_array_equal(getattr(a.field, name), getattr(b.field, name))
+    np.testing.assert_array_equal(a.region, b.region)
+    np.testing.assert_array_equal(a.patch, b.patch)
+    for (_, _, m1), (_, _, m2) in zip(a.links, b.links):
+        np.testing.assert_array_equal(m1, m2)
+    assert a.patches.keys() == b.patches.keys() and a.gates.keys() == b.gates.keys()
+    for pid, patch in a.patches.items():
+        other = b.patches[pid]
+        assert (patch.region, patch.layer, patch.aspect, patch.n_solutions) == (
+            other.region, other.layer, other.aspect, other.n_solutions)
+        for name in ("cells", "slots", "gate_cells", "singular_cells"):
+            np.testing.assert_array_equal(getattr(patch, name), getattr(other, name))
+    for key, gate in a.gates.items():
+        np.testing.assert_array_equal(gate.faces, b.gates[key].faces)
+        assert gate.width == b.gates[key].width
+
+
+@pytest.mark.parametrize("start, goal", REQUESTS)
+def test_decoded_roadmaps_plan_identically(built, decoded, start, goal):
+    options = PlanOptions(smooth=True, max_velocity=1.0, max_acceleration=2.0)
+    reference = Planner(built).plan(start, goal, options)
+    for roadmap in decoded.values():
+        plan = Planner(roadmap).plan(start, goal, options)
+        assert [g.patches for g in plan.global_paths] == [g.patches
+                                                         for g in reference.global_paths]
+        np.testing.assert_array_equal(plan.joints, reference.joints)
+        np.testing.assert_array_equal(plan.poses, reference.poses)
+        np.testing.assert_array_equal(plan.times, reference.times)
+
+
+def test_a_roadmap_message_that_disagrees_with_its_field_is_refused(built):
+    field_msg, roadmap_msg = roadmap_to_msgs(built, Header())
+    roadmap_msg.gates = roadmap_msg.gates[1:]
+    with pytest.raises(InvalidInputError):
+        roadmap_from_msgs(field_msg, roadmap_msg)
