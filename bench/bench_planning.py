@@ -61,7 +61,8 @@ def main():
         planner.plan(start, goal)  # warm the patch profiles
         print(json.dumps({
             "example": name,
-            "plan_median_ms": round(1e3 * _timed(lambda: planner.plan(start, goal), args.repeat), 2),
+            "plan_median_ms": round(
+                1e3 * _timed(lambda: planner.plan(start, goal), args.repeat), 2),
             "smooth_plan_median_ms": round(1e3 * _timed(
                 lambda: planner.plan(start, goal, PlanOptions(smooth=True)), args.repeat), 2),
             "feasibility_median_ms": round(1e3 * _timed(
@@ -71,7 +72,8 @@ def main():
     connected = planned = 0
     times, failures = [], []
     for _ in range(args.pairs):
-        (start, ps), (goal, pg) = random_configuration(roadmap, rng), random_configuration(roadmap, rng)
+        (start, ps), (goal, pg) = (random_configuration(roadmap, rng),
+                                   random_configuration(roadmap, rng))
         linked = nx.has_path(roadmap.graph, ps, pg)
         connected += linked
         begin = time.perf_counter()
@@ -81,7 +83,8 @@ def main():
         except GWRError as exc:
             ok = False
             if linked:
-                failures.append({"start": start, "goal": goal, "error": exc.code, "message": str(exc)})
+                failures.append({"start": start, "goal": goal, "error": exc.code,
+                                 "message": str(exc)})
         times.append(time.perf_counter() - begin)
         planned += ok and linked
     print(json.dumps({

@@ -32,7 +32,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 LIB = ROOT / "ros2_ws" / "install" / "rpr3_gwr_nodes" / "lib" / "rpr3_gwr_nodes"
 PROFILE = ROOT / "ros2_ws" / "fastdds_localhost.xml"
 os.environ.update(FASTRTPS_DEFAULT_PROFILES_FILE=str(PROFILE),
-                  FASTDDS_DEFAULT_PROFILES_FILE=str(PROFILE), RMW_IMPLEMENTATION="rmw_fastrtps_cpp",
+                  FASTDDS_DEFAULT_PROFILES_FILE=str(PROFILE),
+                  RMW_IMPLEMENTATION="rmw_fastrtps_cpp",
                   ROS_DOMAIN_ID=str(random.SystemRandom().randint(1, 100)))
 os.environ.pop("ROS_AUTOMATIC_DISCOVERY_RANGE", None)
 

@@ -35,7 +35,8 @@ def test_sigint_with_requests_in_flight_exits_cleanly(ros_context):
     spinner.start()
     futures = []
     try:
-        field_msg, roadmap_msg = roadmap_to_msgs(build_roadmap(PAPER_GEOMETRY, rho1_slice(step=0.25)), Header())
+        roadmap = build_roadmap(PAPER_GEOMETRY, rho1_slice(step=0.25))
+        field_msg, roadmap_msg = roadmap_to_msgs(roadmap, Header())
         node.create_publisher(NSolutionField, "field", LATCHED_QOS).publish(field_msg)
         node.create_publisher(WorkspaceRoadmap, "roadmap", LATCHED_QOS).publish(roadmap_msg)
         client = node.create_client(PlanPath, "plan_path")

@@ -59,7 +59,8 @@ def test_plan_request_and_response_cross_dds_intact(ros_context):
         assert list(response.trajectory.joint_names) == ["rho1", "rho2", "rho3"]
         assert [list(p.positions) for p in response.trajectory.points] == [
             [17.0, 12.0, 18.0], [17.0, 13.0, 17.0], [17.0, 14.0, 16.0]]
-        assert response.trajectory.points[2].time_from_start == Duration(sec=2, nanosec=250_000_000)
+        assert response.trajectory.points[2].time_from_start == Duration(sec=2,
+                                                                         nanosec=250_000_000)
         assert [p.alpha for p in response.poses] == [request.goal.alpha] * 3
         assert response.poses[2].y == -4.0 and response.min_singularity_margin == 0.0267
     finally:

@@ -42,7 +42,8 @@ class PlannerUnderTest:
     def __init__(self, context):
         self.stamp = Header(frame_id="rpr3_base")
         self.stamp.stamp.sec, self.stamp.stamp.nanosec = 1_700_000_000, 123
-        field_msg, roadmap_msg = roadmap_to_msgs(build_roadmap(PAPER_GEOMETRY, PAPER_GRID), self.stamp)
+        roadmap = build_roadmap(PAPER_GEOMETRY, PAPER_GRID)
+        field_msg, roadmap_msg = roadmap_to_msgs(roadmap, self.stamp)
         self.planner = PlannerNode(context=context)
         self.feeder = Node("roadmap_feeder", context=context)
         self.feeder.create_publisher(NSolutionField, "field", LATCHED_QOS).publish(field_msg)

@@ -37,7 +37,9 @@ TIMEOUT = 30.0
 def _singular_configuration(alpha=0.5):
     """(rho, alpha) with det(Jx) = 0: B1 turned on leg 1's circle until the
     three leg lines concur."""
-    pose = lambda t: [17.0 * math.cos(t), 17.0 * math.sin(t), alpha]
+    def pose(t):
+        return [17.0 * math.cos(t), 17.0 * math.sin(t), alpha]
+
     theta = brentq(lambda t: singularity_margin(pose(t)), math.pi / 3, math.pi / 2)
     return (*inverse_kinematics(pose(theta)), alpha)
 
@@ -160,8 +162,10 @@ def test_whole_chain_plan_execute_record(suite):
     assert abs(result.final_pose.alpha - Q2[3]) < D(0.05)
     assert result.min_singularity_margin > 1e-3
     # Joint states of the whole motion arrive, ending at the goal's legs.
-    at_goal = lambda: any(np.allclose(m.position[:3], Q2[:3], atol=1e-6)
-                          for m in suite.joint_states[before:])
+    def at_goal():
+        return any(np.allclose(m.position[:3], Q2[:3], atol=1e-6)
+                   for m in suite.joint_states[before:])
+
     deadline = time.monotonic() + 5.0
     while not at_goal() and time.monotonic() < deadline:
         time.sleep(0.05)

@@ -23,7 +23,8 @@ OUT = ROOT / "out"
 LIB = ROOT / "ros2_ws" / "install" / "rpr3_gwr_nodes" / "lib" / "rpr3_gwr_nodes"
 PROFILE = ROOT / "ros2_ws" / "fastdds_localhost.xml"
 os.environ.update(FASTRTPS_DEFAULT_PROFILES_FILE=str(PROFILE),
-                  FASTDDS_DEFAULT_PROFILES_FILE=str(PROFILE), RMW_IMPLEMENTATION="rmw_fastrtps_cpp",
+                  FASTDDS_DEFAULT_PROFILES_FILE=str(PROFILE),
+                  RMW_IMPLEMENTATION="rmw_fastrtps_cpp",
                   ROS_DOMAIN_ID=str(random.SystemRandom().randint(1, 100)))
 os.environ.pop("ROS_AUTOMATIC_DISCOVERY_RANGE", None)
 
@@ -103,7 +104,8 @@ def main():
             raise TimeoutError("no roadmap published")
         roadmap = roadmap_from_msgs(received["field"], received["roadmap"])
         seg = roadmap.segmentation
-        print(f"roadmap received: rho1 = {roadmap.grid.fixed_value(0):g}, {seg.n_regions} regions, "
+        print(f"roadmap received: rho1 = {roadmap.grid.fixed_value(0):g}, "
+              f"{seg.n_regions} regions, "
               f"{len(seg.patches)} patches, {len(seg.gates)} gates")
         field_figure(roadmap).savefig(OUT / "field.png", dpi=110)
         roadmap_figure(roadmap).savefig(OUT / "roadmap.png", dpi=110)
@@ -135,7 +137,8 @@ def main():
             print(f"{name}: global paths [{paths}]; trajectory {len(points)} points, "
                   f"{length:.1f} length units of legs, {duration:.1f} s; planned in "
                   f"{1e3 * took:.0f} ms; min singularity margin planned "
-                  f"{response.min_singularity_margin:.4f}, executed {result.min_singularity_margin:.4f}; "
+                  f"{response.min_singularity_margin:.4f}, executed "
+                  f"{result.min_singularity_margin:.4f}; "
                   f"driver: {'done' if result.error_code == 0 else result.error_msg}, platform at "
                   f"alpha = {math.degrees(result.final_pose.alpha):.2f} deg")
             if result.error_code != 0:

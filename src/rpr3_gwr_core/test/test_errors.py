@@ -9,7 +9,8 @@ from rpr3_gwr_core.exceptions import GWRError, InvalidInputError, OutOfGridError
 from rpr3_gwr_core.paper import rho1_slice
 from rpr3_gwr_core.workspace import compute_field
 from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY, Geometry, beta_from_sides
-from rpr3_gwr_core.mechanisms.rpr3 import direct_kinematics, direct_kinematics_batch, inverse_kinematics
+from rpr3_gwr_core.mechanisms.rpr3 import (direct_kinematics, direct_kinematics_batch,
+                                           inverse_kinematics)
 from rpr3_gwr_core.workspace.rotary_disk import rotary_order
 from rpr3_gwr_core.workspace.segmentation import segment
 
@@ -92,8 +93,8 @@ def test_cell_of_non_finite_raises_a_gwr_error(point):
 
 
 def _tiny_field():
-    return compute_field(PAPER_GEOMETRY, rho1_slice(rho2_range=(10.0, 12.0), rho3_range=(20.0, 22.0),
-                                                    step=1.0))
+    grid = rho1_slice(rho2_range=(10.0, 12.0), rho3_range=(20.0, 22.0), step=1.0)
+    return compute_field(PAPER_GEOMETRY, grid)
 
 
 def test_segment_rejects_an_unknown_method():

@@ -12,8 +12,8 @@ from rpr3_gwr_core.mechanisms.rpr3 import MAX_SOLUTIONS, direct_kinematics, sing
 
 @pytest.fixture(scope="module")
 def small_field():
-    return compute_field(PAPER_GEOMETRY, rho1_slice(rho2_range=(10.0, 22.0), rho3_range=(15.0, 27.0),
-                                              step=1.5))
+    grid = rho1_slice(rho2_range=(10.0, 22.0), rho3_range=(15.0, 27.0), step=1.5)
+    return compute_field(PAPER_GEOMETRY, grid)
 
 
 def test_paper_grid_is_401_by_401():
@@ -79,7 +79,8 @@ def test_field_valid_mask_follows_count(small_field):
 
 def test_field_margin_is_the_singularity_margin(small_field):
     valid = small_field.valid
-    np.testing.assert_allclose(small_field.margin[valid], singularity_margin(small_field.poses[valid]))
+    np.testing.assert_allclose(small_field.margin[valid],
+                               singularity_margin(small_field.poses[valid]))
 
 
 def test_field_aspect_is_the_sign_of_margin_and_zero_where_none(small_field):

@@ -66,7 +66,8 @@ def test_assembly_mode_change_goes_through_regions_3_1_3(planner):
 def test_returned_trajectory_passes_an_independent_validation(planner, paper_roadmap):
     for start, goal in ((Q1, Q2), (MODE_A, MODE_B)):
         plan = planner.plan(start, goal, PlanOptions(smooth=True))
-        again = validate_path(paper_roadmap.mechanism, plan.joints, plan.start.pose, plan.goal.pose,
+        again = validate_path(paper_roadmap.mechanism, plan.joints, plan.start.pose,
+                              plan.goal.pose,
                               max_step=0.01)
         assert again.ok, again.reason
         np.testing.assert_allclose(inverse_kinematics(plan.poses), plan.joints, atol=1e-7)
@@ -76,7 +77,9 @@ def test_smoothing_shortens_the_path_and_keeps_the_margin(planner):
     raw = planner.plan(Q1, Q2)
     smooth = planner.plan(Q1, Q2, PlanOptions(smooth=True))
     assert smooth.smoothed
-    length = lambda p: np.sum(np.linalg.norm(np.diff(p.joints, axis=0), axis=1))
+    def length(p):
+        return np.sum(np.linalg.norm(np.diff(p.joints, axis=0), axis=1))
+
     assert length(smooth) < length(raw)
     assert smooth.validation.min_margin >= planner.min_margin
 
@@ -138,7 +141,9 @@ def test_a_configuration_on_the_singular_locus_is_refused(planner):
     # A pose with det(Jx) = 0 and rho1 = 17: turn B1 on leg 1's circle
     # until the leg lines concur.
     alpha = 0.5
-    on_circle = lambda t: [17 * math.cos(t), 17 * math.sin(t), alpha]
+    def on_circle(t):
+        return [17 * math.cos(t), 17 * math.sin(t), alpha]
+
     theta = brentq(lambda t: singularity_margin(on_circle(t)), math.pi / 3, math.pi / 2)
     rho = inverse_kinematics(on_circle(theta))
     assert rho[0] == pytest.approx(17)
@@ -162,9 +167,11 @@ def _random_configuration(roadmap, draw):
     return (*roadmap.grid.joints_of(cell), float(seg.field.poses[cell, slot, 2])), pid
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=40, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
-def test_every_plan_validates_and_infeasible_only_without_roadmap_path(planner, paper_roadmap, data):
+def test_every_plan_validates_and_infeasible_only_without_roadmap_path(planner, paper_roadmap,
+                                                                      data):
     start, ps = _random_configuration(paper_roadmap, data.draw)
     goal, pg = _random_configuration(paper_roadmap, data.draw)
     connected = nx.has_path(paper_roadmap.graph, ps, pg)

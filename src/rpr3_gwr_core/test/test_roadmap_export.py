@@ -44,7 +44,8 @@ def test_roadmap_exposes_its_field_grid_and_geometry(paper_roadmap):
 def test_roadmap_rds_method_builds_the_same_graph(coarse_paper_roadmap):
     rds = build_roadmap(PAPER_GEOMETRY, rho1_slice(step=0.5), method="rds")
     assert set(rds.graph.nodes) == set(coarse_paper_roadmap.graph.nodes)
-    assert set(map(frozenset, rds.graph.edges)) == set(map(frozenset, coarse_paper_roadmap.graph.edges))
+    assert set(map(frozenset, rds.graph.edges)) == set(
+        map(frozenset, coarse_paper_roadmap.graph.edges))
 
 
 def test_aspect_groups_are_sorted_lists_ordered_by_smallest_id():
@@ -116,7 +117,8 @@ def test_json_round_trip_keeps_links(paper_roadmap, loaded):
 
 def test_json_round_trip_keeps_graph_and_aspect_groups(paper_roadmap, loaded):
     assert aspect_groups(loaded.graph) == aspect_groups(paper_roadmap.graph)
-    assert set(map(frozenset, loaded.graph.edges)) == set(map(frozenset, paper_roadmap.graph.edges))
+    assert set(map(frozenset, loaded.graph.edges)) == set(
+        map(frozenset, paper_roadmap.graph.edges))
     for node, data in paper_roadmap.graph.nodes(data=True):
         assert loaded.graph.nodes[node] == data
 

@@ -6,7 +6,8 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from rpr3_gwr_core.workspace.continuity import neighbour_pairs
-from rpr3_gwr_core.workspace.rotary_disk import passage_from_links, rotary_disk_search, rotary_order
+from rpr3_gwr_core.workspace.rotary_disk import (passage_from_links, rotary_disk_search,
+                                                 rotary_order)
 
 
 def build(shape, open_cells, walls=()):

@@ -26,7 +26,8 @@ def case(request, cases):
     if request.param == "paper":
         roadmap = request.getfixturevalue("paper_roadmap")
         return roadmap.field, roadmap.segmentation, roadmap.graph
-    return cases.field(request.param), cases.segmentation(request.param), cases.graph(request.param)
+    name = request.param
+    return cases.field(name), cases.segmentation(name), cases.graph(name)
 
 
 @pytest.fixture

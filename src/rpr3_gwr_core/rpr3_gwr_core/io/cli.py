@@ -61,13 +61,15 @@ def _parser():
         dk.add_argument(name, type=_finite)
     roadmap = sub.add_parser("roadmap", help="build the roadmap and print a JSON summary")
     roadmap.add_argument("--rho1", type=_finite, default=17.0)
-    roadmap.add_argument("--rho2", type=_finite, nargs=2, default=(0.0, 50.0), metavar=("MIN", "MAX"))
-    roadmap.add_argument("--rho3", type=_finite, nargs=2, default=(0.0, 50.0), metavar=("MIN", "MAX"))
+    for leg in ("--rho2", "--rho3"):
+        roadmap.add_argument(leg, type=_finite, nargs=2, default=(0.0, 50.0),
+                             metavar=("MIN", "MAX"))
     roadmap.add_argument("--step", type=_finite, default=0.125)
     roadmap.add_argument("--method", choices=("components", "rds"), default="components")
     roadmap.add_argument("-o", "--output", help="write the full roadmap JSON (with field) here")
     roadmap.add_argument("--gexf", help="write the roadmap graph as GEXF here")
-    roadmap.add_argument("--field-figure", help="write the n-solution field figure here (PNG, PDF, SVG)")
+    roadmap.add_argument("--field-figure",
+                         help="write the n-solution field figure here (PNG, PDF, SVG)")
     roadmap.add_argument("--roadmap-figure", help="write the roadmap graph figure here")
     plan = sub.add_parser("plan", help="plan a singularity-free path between two configurations")
     plan.add_argument("--rho1", type=_finite, default=17.0)

@@ -700,7 +700,10 @@ def _solve(rho, geometry):
     if np.any(rough):
         before = candidate[rough]
         after = _newton(before, r[rough], geometry, 3)
-        fit = lambda p: np.max(np.abs(_residuals(p, r[rough], geometry)), axis=-1)
+
+        def fit(p):
+            return np.max(np.abs(_residuals(p, r[rough], geometry)), axis=-1)
+
         moved = np.max(np.abs(after - before), axis=-1)
         keep = (fit(after) < fit(before)) & ((moved < 1e-3 * geometry.scale) | ~regular[rough])
         candidate[np.flatnonzero(rough)[keep]] = after[keep]

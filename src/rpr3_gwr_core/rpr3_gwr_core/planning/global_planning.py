@@ -84,7 +84,8 @@ class RoadmapIndex:
         self.weighted.add_nodes_from(self.graph.nodes)
         for (a, b), gate in seg.gates.items():
             middle = coords[gate.faces.ravel()].mean(axis=0)
-            cost = (np.linalg.norm(self.centroid[a] - middle) + np.linalg.norm(middle - self.centroid[b])
+            cost = (np.linalg.norm(self.centroid[a] - middle)
+                    + np.linalg.norm(middle - self.centroid[b])
                     + narrow_penalty * float(np.prod(grid.steps)) / gate.width)
             self.weighted.add_edge(a, b, cost=float(cost))
 

@@ -208,7 +208,8 @@ class LocalPlanner:
             cols.append(lb + offsets[k + 1])
             weights.append(0.5 * step * (profiles[k].cost[la] + profiles[k + 1].cost[lb]))
         n = int(offsets[-1])
-        graph = sparse.csr_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))),
+        graph = sparse.csr_matrix((np.concatenate(weights),
+                                   (np.concatenate(rows), np.concatenate(cols))),
                                   shape=(n, n))
         source = int(profiles[0].local(start_cell))
         target = int(offsets[-2] + profiles[-1].local(goal_cell))

@@ -200,7 +200,8 @@ class Planner:
         answer = feasibility(self.index, s.patch, g.patch)
         if not answer.feasible:
             error = InfeasiblePathError(
-                f"no path from patch {s.patch} to patch {g.patch}: {answer.reason.replace('_', ' ')}")
+                f"no path from patch {s.patch} to patch {g.patch}: "
+                f"{answer.reason.replace('_', ' ')}")
             error.reason = answer.reason
             raise error
         paths = global_paths(self.index, s.patch, g.patch, options.weighted, options.max_paths)

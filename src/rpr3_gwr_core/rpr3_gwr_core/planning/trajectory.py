@@ -1,11 +1,11 @@
-"""Turning a cell path into a leg trajectory: smoothing and timing.
+"""Turning a cell path into a joint trajectory: smoothing and timing.
 
 Smoothing works in the grid's coordinates of the path (the joints on its
-axes; the others are fixed): shortcutting replaces a stretch of the path by a straight segment when every
-cell that segment passes over (sampled at a fifth of a cell) belongs, in
-order, to the patches of the stretch, and keeps ``min_clearance`` cells from
-the patch boundary except within a few cells of the stretch's gate
-crossings; Chaikin corner cutting then rounds the corners.  The caller
+axes; the others are fixed): shortcutting replaces a stretch of the path by
+a straight segment when every cell that segment passes over (sampled at a
+fifth of a cell) belongs, in order, to the patches of the stretch, and keeps
+``min_clearance`` cells from the patch boundary except within a few cells of
+the stretch's gate crossings; Chaikin corner cutting then rounds the corners.  The caller
 validates the result and falls back to the unsmoothed path if it fails.
 
 Timing is a velocity profile along the path's arc length s: the speed

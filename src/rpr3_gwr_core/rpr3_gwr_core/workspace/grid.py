@@ -56,7 +56,8 @@ class Axis:
         if step <= 0:
             raise InvalidInputError(f"step must be positive, got {step}")
         if high < low:
-            raise InvalidInputError(f"an axis' range must satisfy low <= high, got ({low}, {high})")
+            raise InvalidInputError(
+                f"an axis' range must satisfy low <= high, got ({low}, {high})")
         object.__setattr__(self, "joint", int(self.joint))
         for name, value in (("low", low), ("high", high), ("step", step)):
             object.__setattr__(self, name, value)
