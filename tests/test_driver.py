@@ -23,9 +23,12 @@ from rpr3_gwr_core.mechanisms.rpr3 import inverse_kinematics
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import Configuration
 from rpr3_gwr_msgs.srv import ResetDriver
+from rpr3_gwr_nodes.profiles import SENSOR_QOS
 from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
 from rpr3_gwr_nodes.rpr3_driver import Rpr3Driver
+from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+from visualization_msgs.msg import MarkerArray
 
 D = math.radians
 Q1 = (17.0, 12.0, 18.0, D(122.82))
@@ -70,9 +73,13 @@ class DriverUnderTest:
         self.client = Node("driver_test_client", context=context)
         self.reset_client = self.client.create_client(ResetDriver, "reset")
         self.action_client = ActionClient(self.client, ExecuteTrajectory, "execute_trajectory")
-        self.diagnostics = []
+        self.diagnostics, self.markers, self.joint_states = [], [], []
         self.client.create_subscription(DiagnosticArray, "/diagnostics",
                                         self.diagnostics.append, 10)
+        self.client.create_subscription(MarkerArray, "mechanism_markers", self.markers.append,
+                                        SENSOR_QOS)
+        self.client.create_subscription(JointState, "joint_states", self.joint_states.append,
+                                        SENSOR_QOS)
         self.executor = MultiThreadedExecutor(num_threads=4, context=context)
         for node in (self.driver, self.client):
             self.executor.add_node(node)
@@ -194,6 +201,32 @@ def test_an_abort_says_why_with_its_margin_and_diagnostics_go_to_error(rig):
     assert rig.reset(Q1).success
     seen = len(rig.diagnostics)
     assert rig.level_after(seen) == DiagnosticStatus.OK
+
+
+def test_the_mechanism_markers_have_the_legs_of_the_joint_states(rig):
+    assert rig.reset(Q1).success
+    rig.execute(_line(Q1[:3], np.array(Q1[:3]) + [0.0, 0.5, -0.5], 1.0))
+    deadline = time.monotonic() + 5.0
+    pairs = []
+    while len(pairs) < 5 and time.monotonic() < deadline:
+        stamps = {(m.header.stamp.sec, m.header.stamp.nanosec): m for m in rig.joint_states}
+        pairs = [(stamps[key], array) for array in rig.markers
+                 if (key := (array.markers[0].header.stamp.sec,
+                             array.markers[0].header.stamp.nanosec)) in stamps]
+        time.sleep(0.05)
+    assert len(pairs) >= 5, "no marker array with the stamp of a joint state"
+    base = rig.driver.geometry.base
+    for state, array in pairs:
+        by_name = {m.ns: m for m in array.markers}
+        assert {m.header.frame_id for m in array.markers} == {"base"}
+        np.testing.assert_allclose([[p.x, p.y] for p in by_name["base"].points], base)
+        ends = np.array([[p.x, p.y] for p in by_name["legs"].points]).reshape(3, 2, 2)
+        np.testing.assert_allclose(ends[:, 0], base)
+        np.testing.assert_allclose(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1),
+                                   state.position[:3], atol=1e-9)
+        corners = np.array([[p.x, p.y] for p in by_name["platform"].points])
+        np.testing.assert_allclose(corners[:3], ends[:, 1], atol=1e-9)
+        np.testing.assert_allclose(corners[3], corners[0])
 
 
 def test_the_driver_takes_the_builders_geometry_parameters(ros_context):

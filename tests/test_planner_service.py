@@ -6,6 +6,7 @@ paper's roadmap messages and a client, spun by one executor thread."""
 import collections
 import math
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -22,6 +23,7 @@ from rpr3_gwr_nodes.conversions import roadmap_to_msgs
 from rpr3_gwr_nodes.planner import PlannerNode
 from rpr3_gwr_nodes.profiles import LATCHED_QOS
 from std_msgs.msg import Header
+from visualization_msgs.msg import MarkerArray
 
 D = math.radians
 Q1, Q2 = (17.0, 12.0, 18.0, D(122.82)), (17.0, 10.0, 25.0, D(-24.24))
@@ -50,6 +52,9 @@ class PlannerUnderTest:
         self.feeder.create_publisher(WorkspaceRoadmap, "roadmap", LATCHED_QOS).publish(roadmap_msg)
         self.client = Node("planner_test_client", context=context)
         self.plan_client = self.client.create_client(PlanPath, "plan_path")
+        self.path_markers = []
+        self.client.create_subscription(MarkerArray, "planned_path_markers",
+                                        self.path_markers.append, 10)
         self.executor = MultiThreadedExecutor(num_threads=4, context=context)
         for node in (self.planner, self.feeder, self.client):
             self.executor.add_node(node)
@@ -172,6 +177,25 @@ def test_the_response_names_the_roadmap_that_answered(service):
     failed = service.plan((13.0, 12.0, 18.0, 0.0), Q2)
     assert failed.error_code == PlanPath.Response.ERROR_RHO1_MISMATCH
     assert failed.roadmap_rho1 == 17.0
+
+
+def test_each_plan_is_drawn_for_rviz(service):
+    response = service.plan(Q1, Q2)
+    assert response.success, response.error_msg
+    stamp = response.trajectory.header.stamp
+    deadline = time.monotonic() + TIMEOUT
+    drawn = []
+    while not drawn and time.monotonic() < deadline:
+        drawn = [a for a in service.path_markers if a.markers[0].header.stamp == stamp]
+        time.sleep(0.02)
+    assert drawn, "no markers for the plan"
+    by_name = {m.ns: m for m in drawn[0].markers}
+    np.testing.assert_allclose([[p.x, p.y] for p in by_name["joint_path"].points],
+                               [p.positions[1:] for p in response.trajectory.points])
+    np.testing.assert_allclose([[p.x, p.y] for p in by_name["platform_path"].points],
+                               [[p.x, p.y] for p in response.poses])
+    assert by_name["platform_path"].header.frame_id == "base"
+    assert by_name["joint_path"].header.frame_id == "joint_space"
 
 
 # --- the fuzz test ------------------------------------------------------------------------------

@@ -5,7 +5,9 @@ a grid gives an empty one."""
 import threading
 import time
 
+import numpy as np
 import pytest
+from nav_msgs.msg import OccupancyGrid
 
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
@@ -13,6 +15,7 @@ from rclpy.parameter import Parameter
 from rpr3_gwr_msgs.msg import NSolutionField
 from rpr3_gwr_nodes.profiles import LATCHED_QOS
 from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
+from visualization_msgs.msg import MarkerArray
 
 TIMEOUT = 60.0
 
@@ -93,3 +96,35 @@ def test_builder_refuses_grids_without_a_roadmap_and_keeps_the_last_good(rig):
     time.sleep(0.5)
     assert fields[-1] is good and len(builder.roadmap.segmentation.patches) > 0
     assert (builder.roadmap.grid.axes[0].low, builder.roadmap.grid.axes[0].high) == (0.0, 50.0)
+
+
+def test_the_builder_draws_the_field_and_the_roadmap_for_rviz(rig):
+    assert rig.arrived.wait(TIMEOUT), "no field published"
+    got, done = {}, threading.Event()
+    topics = {"field_count_map": OccupancyGrid, "field_region_map": OccupancyGrid,
+              "roadmap_markers": MarkerArray}
+
+    def keep(topic):
+        def callback(msg):
+            got[topic] = msg
+            if len(got) == len(topics):
+                done.set()
+        return callback
+
+    for topic, kind in topics.items():
+        rig.listener.create_subscription(kind, topic, keep(topic), LATCHED_QOS)
+    assert done.wait(TIMEOUT), f"only {sorted(got)} arrived"
+    roadmap = rig.builder.roadmap
+    seg, (n2, n3) = roadmap.segmentation, roadmap.grid.shape
+    for topic, cells in (("field_count_map", seg.field.count), ("field_region_map", seg.region)):
+        grid_map = got[topic]
+        assert grid_map.header.frame_id == "joint_space"
+        assert (grid_map.info.width, grid_map.info.height, grid_map.info.resolution) == (
+            n2, n3, 0.5)
+        # Back from x-fastest map order to the grid's row-major cells.
+        values = np.array(grid_map.data).reshape(n3, n2).T.ravel()
+        np.testing.assert_array_equal(values > 0, cells > 0)
+    labels = [m for m in got["roadmap_markers"].markers if m.ns == "patches"]
+    assert sorted(int(m.text) for m in labels) == sorted(seg.patches)
+    gates = [m for m in got["roadmap_markers"].markers if m.ns == "gates"][0]
+    assert len(gates.points) == 4 * len(seg.gates)

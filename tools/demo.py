@@ -76,8 +76,8 @@ def main():
         _start("roadmap_builder", log=log),
         _start("planner", log=log),
         _start("rpr3_driver", ("time_scale", TIME_SCALE), log=log),
-        _start("trajectory_recorder", ("bag_path", str(bag)), ("record_joint_states", True),
-               log=log),
+        _start("trajectory_recorder", ("bag_path", str(bag)), ("storage", "mcap"),
+               ("record_joint_states", True), ("record_visualization", True), log=log),
     ]
     print(f"started builder, planner, driver and recorder (ROS_DOMAIN_ID "
           f"{os.environ['ROS_DOMAIN_ID']}, loopback DDS); node logs in {OUT / 'demo_nodes.log'}")
@@ -115,6 +115,15 @@ def main():
         if not (plan.wait_for_service(timeout_sec=TIMEOUT) and reset.wait_for_service(
                 timeout_sec=TIMEOUT) and execute.wait_for_server(timeout_sec=TIMEOUT)):
             raise TimeoutError("planner or driver not available")
+        # The planner takes the roadmap from the same topics, on its own time.
+        q1 = EXAMPLES["paper_5_2_two_configurations"][0]
+        first = PlanPath.Request(start=_configuration(q1), goal=_configuration(q1),
+                                 feasibility_only=True)
+        deadline = time.monotonic() + TIMEOUT
+        while _wait(plan.call_async(first)).error_code == PlanPath.Response.ERROR_NO_ROADMAP:
+            if time.monotonic() > deadline:
+                raise TimeoutError("the planner got no roadmap")
+            time.sleep(0.1)
         for name, (q1, q2) in EXAMPLES.items():
             request = PlanPath.Request(start=_configuration(q1), goal=_configuration(q2),
                                        smooth=True, max_velocity=2.0, max_acceleration=4.0)

@@ -13,7 +13,9 @@ error mapping: an error of the core becomes the response's error code and
 message, anything else ``ERROR_INTERNAL``, and the node never dies on a
 request.  Each response names the roadmap that answered it (its stamp and
 rho1).  Each planned trajectory is also published on ``planned_trajectory``
-(trajectory_msgs/JointTrajectory) for recording and display.
+(trajectory_msgs/JointTrajectory) for recording, and drawn on
+``planned_path_markers`` (visualization_msgs/MarkerArray: the platform's
+track in ``base``, the leg path in ``joint_space``).
 """
 
 import math
@@ -31,10 +33,12 @@ from rpr3_gwr_msgs.msg import GlobalPath, NSolutionField, PlatformPose, Workspac
 from rpr3_gwr_msgs.srv import PlanPath
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+from visualization_msgs.msg import MarkerArray
 
 from .conversions import MAX_DURATION, duration_msg, roadmap_from_msgs
 from .profiles import BASE_FRAME, JOINT_NAMES, LATCHED_QOS
 from .spin import run
+from .visualization import path_markers
 
 __all__ = ["PlannerNode", "ERROR_CODES", "FEASIBILITY", "plan_to_trajectory", "main"]
 
@@ -113,6 +117,7 @@ class PlannerNode(Node):
         self.create_subscription(WorkspaceRoadmap, "roadmap", self._on_roadmap, LATCHED_QOS,
                                  callback_group=updates)
         self.trajectory_pub = self.create_publisher(JointTrajectory, "planned_trajectory", 10)
+        self.marker_pub = self.create_publisher(MarkerArray, "planned_path_markers", 10)
         self.create_service(PlanPath, "plan_path", self._on_plan,
                             callback_group=ReentrantCallbackGroup())
         self.ready = threading.Event()
@@ -201,6 +206,8 @@ class PlannerNode(Node):
         response.error_code = PlanPath.Response.ERROR_NONE
         if not options.feasibility_only:
             self.trajectory_pub.publish(response.trajectory)
+            self.marker_pub.publish(path_markers(state.planner.roadmap.grid, plan.joints,
+                                                 plan.poses, response.trajectory.header.stamp))
         return response
 
     def _header(self):

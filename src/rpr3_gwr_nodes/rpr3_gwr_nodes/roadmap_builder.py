@@ -5,7 +5,11 @@ late joiners get the latest):
 
 * ``field`` (rpr3_gwr_msgs/NSolutionField): every cell's solutions, regions,
   patches and continuation links;
-* ``roadmap`` (rpr3_gwr_msgs/WorkspaceRoadmap): patches and gates.
+* ``roadmap`` (rpr3_gwr_msgs/WorkspaceRoadmap): patches and gates;
+* for RViz and Foxglove, on 2-D grids, in the frame ``joint_space``
+  (x = rho2, y = rho3): ``field_count_map`` and ``field_region_map``
+  (nav_msgs/OccupancyGrid, as maps) and ``roadmap_markers``
+  (visualization_msgs/MarkerArray: patch labels, gates).
 
 Parameters: the geometry (``a1``, ``a2``, ``a3``, ``d1``, ``d3`` [length
 unit], ``beta`` [rad], read-only, :mod:`.geometry_parameters`) and the grid
@@ -28,13 +32,16 @@ from rclpy.parameter import Parameter
 from rpr3_gwr_core.exceptions import GWRError
 from rpr3_gwr_core.paper import rho1_slice
 from rpr3_gwr_core.workspace import build_roadmap
+from nav_msgs.msg import OccupancyGrid
 from rpr3_gwr_msgs.msg import NSolutionField, WorkspaceRoadmap
 from std_msgs.msg import Header
+from visualization_msgs.msg import MarkerArray
 
 from .conversions import roadmap_to_msgs
 from .geometry_parameters import declare_geometry
 from .profiles import BASE_FRAME, LATCHED_QOS
 from .spin import run
+from .visualization import field_maps, roadmap_markers
 
 __all__ = ["RoadmapBuilder", "main"]
 
@@ -69,6 +76,9 @@ class RoadmapBuilder(Node):
                                                       high=100.0))
         self.field_pub = self.create_publisher(NSolutionField, "field", LATCHED_QOS)
         self.roadmap_pub = self.create_publisher(WorkspaceRoadmap, "roadmap", LATCHED_QOS)
+        self.map_pubs = [self.create_publisher(OccupancyGrid, topic, LATCHED_QOS)
+                         for topic in ("field_count_map", "field_region_map")]
+        self.marker_pub = self.create_publisher(MarkerArray, "roadmap_markers", LATCHED_QOS)
         self.roadmap = None
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._parameters_set)
@@ -145,6 +155,11 @@ class RoadmapBuilder(Node):
         field_msg, roadmap_msg = roadmap_to_msgs(roadmap, header)
         self.field_pub.publish(field_msg)
         self.roadmap_pub.publish(roadmap_msg)
+        maps = field_maps(roadmap, header.stamp)
+        if maps is not None:
+            for publisher, grid_map in zip(self.map_pubs, maps):
+                publisher.publish(grid_map)
+            self.marker_pub.publish(roadmap_markers(roadmap, header.stamp))
         self.get_logger().info(
             f"published the roadmap: {seg.n_regions} regions, {len(seg.patches)} patches, "
             f"{len(seg.gates)} gates, built in {time.perf_counter() - start:.2f} s")

@@ -8,6 +8,10 @@ so it stays in its assembly mode unless a singularity is crossed.
   active legs rho1..rho3 (positions and velocities) and the passive angles
   theta1..theta3;
 * ``platform_pose`` (rpr3_gwr_msgs/PlatformPose, same rate);
+* ``mechanism_markers`` (visualization_msgs/MarkerArray, same rate and stamp
+  as the joint states, frame ``base``): base points, legs and platform,
+  coloured from green (margin ``warn_margin`` and above) to red
+  (``abort_margin``);
 * ``/diagnostics`` (diagnostic_msgs/DiagnosticArray, 1 Hz and at once on an
   abort): the normalised det(Jx) margin m with level OK when
   ``|m| >= warn_margin``, WARN when ``abort_margin <= |m| < warn_margin``,
@@ -46,11 +50,13 @@ from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import PlatformPose
 from rpr3_gwr_msgs.srv import ResetDriver
 from sensor_msgs.msg import JointState
+from visualization_msgs.msg import MarkerArray
 
 from .conversions import duration_msg
 from .geometry_parameters import declare_geometry
 from .profiles import JOINT_NAMES, PASSIVE_JOINT_NAMES, SENSOR_QOS
 from .spin import run
+from .visualization import mechanism_markers
 
 __all__ = ["Rpr3Driver", "main"]
 
@@ -122,6 +128,7 @@ class Rpr3Driver(Node):
         self.joint_pub = self.create_publisher(JointState, "joint_states", SENSOR_QOS)
         self.pose_pub = self.create_publisher(PlatformPose, "platform_pose",
                                               SENSOR_QOS)
+        self.marker_pub = self.create_publisher(MarkerArray, "mechanism_markers", SENSOR_QOS)
         self.diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         timers = MutuallyExclusiveCallbackGroup()
         self.create_timer(1.0 / self.get_parameter("rate").value, self._publish_state,
@@ -176,6 +183,7 @@ class Rpr3Driver(Node):
     def _publish_state(self):
         with self._lock:
             rho, pose, velocity = self.rho.copy(), self.pose.copy(), self.velocity.copy()
+            margin = self.margin
         msg = JointState()
         msg.header.stamp = self.get_clock().now().to_msg()
         msg.name = JOINT_NAMES + PASSIVE_JOINT_NAMES
@@ -184,6 +192,9 @@ class Rpr3Driver(Node):
         msg.velocity = [float(v) for v in velocity] + [math.nan] * 3
         self.joint_pub.publish(msg)
         self.pose_pub.publish(_pose_msg(pose))
+        self.marker_pub.publish(mechanism_markers(
+            self.geometry, pose, margin, self.get_parameter("warn_margin").value,
+            self.get_parameter("abort_margin").value, msg.header.stamp))
 
     def diagnostic_status(self):
         """The singularity status (the module doc gives its levels)."""

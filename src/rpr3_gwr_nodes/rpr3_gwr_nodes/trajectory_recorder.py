@@ -17,6 +17,8 @@ the last period.  Such a bag has no metadata.yaml: ``rpr3_gwr_recover_bag``
 
 Parameters: ``bag_path`` (default ``rpr3_gwr_bags/<date>_<time>``),
 ``storage`` (``sqlite3`` or ``mcap``), ``record_joint_states`` (bool),
+``record_visualization`` (bool: also the suite's markers and field maps, so
+one MCAP file opened in Foxglove shows the plan and its execution),
 ``flush_period`` [s].
 """
 
@@ -26,6 +28,7 @@ import queue
 import threading
 import time
 
+from nav_msgs.msg import OccupancyGrid
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
@@ -34,13 +37,23 @@ from rosbags.rosbag2.storage_sqlite3 import Sqlite3Writer
 from rosbags.typesys import Stores, get_typestore
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
+from visualization_msgs.msg import MarkerArray
 
-from .profiles import SENSOR_QOS
+from .profiles import LATCHED_QOS, SENSOR_QOS
 from .spin import run
 
 __all__ = ["TrajectoryRecorder", "main"]
 
 _STORAGE = {"sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP}
+# Topic: (type, type name, QoS) of what record_visualization adds; latched
+# topics are taken with the publisher's durability so a late recorder gets them.
+_VISUALIZATION = {
+    "mechanism_markers": (MarkerArray, "visualization_msgs/msg/MarkerArray", SENSOR_QOS),
+    "planned_path_markers": (MarkerArray, "visualization_msgs/msg/MarkerArray", 10),
+    "roadmap_markers": (MarkerArray, "visualization_msgs/msg/MarkerArray", LATCHED_QOS),
+    "field_count_map": (OccupancyGrid, "nav_msgs/msg/OccupancyGrid", LATCHED_QOS),
+    "field_region_map": (OccupancyGrid, "nav_msgs/msg/OccupancyGrid", LATCHED_QOS),
+}
 
 
 class TrajectoryRecorder(Node):
@@ -55,6 +68,9 @@ class TrajectoryRecorder(Node):
             description="rosbag2 storage: sqlite3 or mcap", read_only=True))
         self.declare_parameter("record_joint_states", False, ParameterDescriptor(
             description="Also record the driver's joint_states", read_only=True))
+        self.declare_parameter("record_visualization", False, ParameterDescriptor(
+            description="Also record the markers and field maps of the builder, the planner "
+                        "and the driver", read_only=True))
         self.declare_parameter("flush_period", 0.5, ParameterDescriptor(
             description="Most time between a message's arrival and its reaching the bag's "
                         "file; a killed recorder loses at most this much [s]",
@@ -69,6 +85,8 @@ class TrajectoryRecorder(Node):
                                          10)}
         if self.get_parameter("record_joint_states").value:
             topics["joint_states"] = (JointState, "sensor_msgs/msg/JointState", SENSOR_QOS)
+        if self.get_parameter("record_visualization").value:
+            topics.update(_VISUALIZATION)
         self.counts = {topic: 0 for topic in topics}
         self._queue = queue.Queue()
         opened = threading.Event()

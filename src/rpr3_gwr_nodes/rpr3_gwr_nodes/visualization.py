@@ -1,0 +1,182 @@
+"""Standard messages for RViz and Foxglove: the mechanism, the n-solution
+field, the roadmap and planned paths.
+
+Two frames: ``base`` (:data:`~.profiles.BASE_FRAME`), the plane of the
+manipulator, where the mechanism and the platform's path are drawn; and
+``joint_space`` (:data:`JOINT_SPACE_FRAME`), the grid's plane (x = rho2,
+y = rho3, in length units) of a 2-D roadmap, where the field maps, the
+roadmap and the joint path are drawn over one another.
+"""
+
+import numpy as np
+from geometry_msgs.msg import Point, Pose
+from nav_msgs.msg import MapMetaData, OccupancyGrid
+from rpr3_gwr_core.mechanisms.rpr3 import inverse_kinematics, passive_angles
+from std_msgs.msg import ColorRGBA, Header
+from visualization_msgs.msg import Marker, MarkerArray
+
+from .profiles import BASE_FRAME
+
+__all__ = ["JOINT_SPACE_FRAME", "mechanism_markers", "field_maps", "roadmap_markers",
+           "path_markers", "margin_color"]
+
+JOINT_SPACE_FRAME = "joint_space"
+_BLUE = ColorRGBA(r=0.2, g=0.4, b=0.9, a=1.0)
+_GREY = ColorRGBA(r=0.5, g=0.5, b=0.5, a=1.0)
+
+
+def margin_color(margin, warn, abort):
+    """Green at a margin of ``warn`` or more, through yellow to red at ``abort``."""
+    level = float(np.clip((abs(margin) - abort) / max(warn - abort, 1e-12), 0.0, 1.0))
+    return ColorRGBA(r=float(min(1.0, 2.0 * (1.0 - level))), g=float(min(1.0, 2.0 * level)),
+                     b=0.0, a=1.0)
+
+
+def _points(xy, z=0.0):
+    return [Point(x=float(x), y=float(y), z=float(z)) for x, y in xy]
+
+
+def _marker(stamp, frame, namespace, kind, scale, color, identity=0):
+    marker = Marker(header=Header(stamp=stamp, frame_id=frame), ns=namespace, id=identity,
+                    type=kind, action=Marker.ADD, pose=Pose(), color=color)
+    marker.pose.orientation.w = 1.0
+    marker.scale.x = marker.scale.y = marker.scale.z = float(scale)
+    return marker
+
+
+def mechanism_markers(geometry, pose, margin, warn, abort, stamp):
+    """The 3-RPR at a pose in ``base``: base points, legs and platform, the
+    legs and platform coloured by the margin (:func:`margin_color`).
+
+    Parameters
+    ----------
+    geometry : rpr3_gwr_core.mechanisms.Geometry
+    pose : array_like, shape (3,)
+        ``(x, y, alpha)`` [length unit, length unit, rad].
+    margin : float
+        Its signed normalised det(Jx).
+    warn, abort : float
+        The driver's margin thresholds.
+    stamp : builtin_interfaces.msg.Time
+
+    Returns
+    -------
+    visualization_msgs.msg.MarkerArray
+        Namespaces ``base`` (a sphere list of A1..A3), ``legs`` (a line list
+        A_i B_i) and ``platform`` (a closed line strip B1 B2 B3).
+    """
+    # B_i from the legs' lengths and directions, the joints the driver reports.
+    base = geometry.base
+    theta = passive_angles(pose, geometry)
+    joints = base + inverse_kinematics(pose, geometry)[:, None] * np.stack(
+        [np.cos(theta), np.sin(theta)], axis=-1)
+    color = margin_color(margin, warn, abort)
+    bases = _marker(stamp, BASE_FRAME, "base", Marker.SPHERE_LIST, 0.8, _GREY)
+    bases.points = _points(base)
+    lines = _marker(stamp, BASE_FRAME, "legs", Marker.LINE_LIST, 0.25, color)
+    lines.points = _points(np.stack([base, joints], axis=1).reshape(-1, 2))
+    platform = _marker(stamp, BASE_FRAME, "platform", Marker.LINE_STRIP, 0.35, color)
+    platform.points = _points(np.vstack([joints, joints[:1]]))
+    return MarkerArray(markers=[bases, lines, platform])
+
+
+def _plane_axes(roadmap):
+    grid = roadmap.grid
+    if grid.ndim != 2:
+        return None
+    return grid.axes
+
+
+def field_maps(roadmap, stamp):
+    """The n-solution field of a 2-D roadmap as two occupancy grids in
+    ``joint_space``, one cell per grid cell: solution counts (value
+    ``100 * count / max_solutions``) and regions (``100 * region /
+    n_regions``, 0 for none); None for other grids.
+
+    Returns
+    -------
+    (nav_msgs.msg.OccupancyGrid, nav_msgs.msg.OccupancyGrid) or None
+    """
+    axes = _plane_axes(roadmap)
+    if axes is None:
+        return None
+    seg = roadmap.segmentation
+    u, v = axes
+    header = Header(stamp=stamp, frame_id=JOINT_SPACE_FRAME)
+    info = MapMetaData(resolution=float(u.step), width=u.count, height=v.count)
+    info.origin.position.x, info.origin.position.y = u.low - u.step / 2, v.low - v.step / 2
+    info.origin.orientation.w = 1.0
+    # Occupancy grids run along x fastest: the transpose of the row-major cells.
+    count = 100 * seg.field.count.astype(int) // seg.field.max_solutions
+    region = 100 * seg.region.astype(int) // max(seg.n_regions, 1)
+    return tuple(OccupancyGrid(header=header, info=info,
+                               data=values.reshape(u.count, v.count).T.ravel().astype(
+                                   np.int8).tolist())
+                 for values in (count, region))
+
+
+def roadmap_markers(roadmap, stamp):
+    """The roadmap of a 2-D grid in ``joint_space``: a label per patch at its
+    most interior cell, raised by its layer, and a line per gate between the
+    labels of its patches through the middle of its faces; None for other
+    grids.
+
+    Returns
+    -------
+    visualization_msgs.msg.MarkerArray or None
+    """
+    if _plane_axes(roadmap) is None:
+        return None
+    seg, grid = roadmap.segmentation, roadmap.grid
+    coordinates = grid.coordinates()
+    anchor = {}
+    markers = []
+    for pid, patch in sorted(seg.patches.items()):
+        middle = coordinates[patch.cells].mean(axis=0)
+        nearest = patch.cells[np.argmin(np.linalg.norm(coordinates[patch.cells] - middle,
+                                                        axis=1))]
+        anchor[pid] = (*coordinates[nearest], 2.0 * patch.layer)
+        color = ColorRGBA(r=0.9, g=0.2, b=0.2, a=1.0) if patch.aspect > 0 else _BLUE
+        label = _marker(stamp, JOINT_SPACE_FRAME, "patches", Marker.TEXT_VIEW_FACING, 1.5,
+                        color, pid)
+        label.pose.position = Point(x=float(anchor[pid][0]), y=float(anchor[pid][1]),
+                                    z=float(anchor[pid][2]))
+        label.text = str(pid)
+        markers.append(label)
+    gates = _marker(stamp, JOINT_SPACE_FRAME, "gates", Marker.LINE_LIST, 0.1, _GREY)
+    for (a, b), gate in seg.gates.items():
+        middle = coordinates[gate.faces.ravel()].mean(axis=0)
+        for pid in (a, b):
+            gates.points += [Point(x=float(anchor[pid][0]), y=float(anchor[pid][1]),
+                                   z=float(anchor[pid][2])),
+                             Point(x=float(middle[0]), y=float(middle[1]), z=0.0)]
+    markers.append(gates)
+    return MarkerArray(markers=markers)
+
+
+def path_markers(grid, joints, poses, stamp):
+    """A planned path: B1's track in ``base`` and, for a 2-D grid, the joint
+    path in ``joint_space``.
+
+    Parameters
+    ----------
+    grid : rpr3_gwr_core.workspace.Grid
+    joints : ndarray, shape (n, 3)
+        Leg waypoints [length unit].
+    poses : ndarray, shape (n, 3)
+        Platform poses along them.
+    stamp : builtin_interfaces.msg.Time
+
+    Returns
+    -------
+    visualization_msgs.msg.MarkerArray
+    """
+    track = _marker(stamp, BASE_FRAME, "platform_path", Marker.LINE_STRIP, 0.2, _BLUE)
+    track.points = _points(np.asarray(poses)[:, :2])
+    markers = [track]
+    if grid.ndim == 2:
+        leg_path = _marker(stamp, JOINT_SPACE_FRAME, "joint_path", Marker.LINE_STRIP, 0.2,
+                           ColorRGBA(r=0.0, g=0.0, b=0.0, a=1.0))
+        leg_path.points = _points(np.asarray(joints)[:, list(grid.axis_joints)])
+        markers.append(leg_path)
+    return MarkerArray(markers=markers)
