@@ -42,7 +42,7 @@ def test_cli_roadmap_summary_and_output_file(tmp_path, capsys):
 
 
 def test_field_figure_labels_every_region(coarse_paper_roadmap):
-    figures = pytest.importorskip("rpr3_gwr_core.figures")
+    figures = pytest.importorskip("rpr3_gwr_core.io.figures")
     figure = figures.field_figure(coarse_paper_roadmap)
     texts = {t.get_text() for t in figure.axes[0].texts}
     expected = {str(r) for r in range(1, coarse_paper_roadmap.segmentation.n_regions + 1)}
@@ -50,7 +50,7 @@ def test_field_figure_labels_every_region(coarse_paper_roadmap):
 
 
 def test_roadmap_figure_draws_one_label_per_patch(coarse_paper_roadmap):
-    figures = pytest.importorskip("rpr3_gwr_core.figures")
+    figures = pytest.importorskip("rpr3_gwr_core.io.figures")
     figure = figures.roadmap_figure(coarse_paper_roadmap)
     texts = {t.get_text() for t in figure.axes[0].texts}
     assert {str(p) for p in coarse_paper_roadmap.segmentation.patches} <= texts

@@ -10,6 +10,7 @@ Subcommands::
                   [--smooth] [--weighted] [--feasibility-only]
                   [--max-velocity V --max-acceleration A] [-o FILE]
     rpr3-gwr plot PLAN.json [-o FIGURE]
+    rpr3-gwr cusps [--rho1 17] [--cache-dir DIR]
 
 Results go to stdout as JSON; bad arguments exit with code 2 and one line on
 stderr; a plan that cannot be made prints an ``error`` object with a code and
@@ -33,6 +34,7 @@ from ..mechanisms.rpr3 import aspect, direct_kinematics
 from ..paper import PAPER_GEOMETRY, rho1_slice
 from ..planning import PlanOptions, Planner
 from ..workspace import Grid, build_roadmap
+from ..workspace.cusps import find_cusps
 from .cache import cached_roadmap, default_cache_dir
 
 __all__ = ["main"]
@@ -89,6 +91,9 @@ def _parser():
     plan.add_argument("-o", "--output", help="also write the JSON here")
     plan.add_argument("--cache-dir", help="roadmap cache (default: %(default)s)",
                       default=default_cache_dir())
+    cusps = sub.add_parser("cusps", help="the cusp points of the singular curve at rho1")
+    cusps.add_argument("--rho1", type=_finite, default=17.0)
+    cusps.add_argument("--cache-dir", default=default_cache_dir())
     plot = sub.add_parser("plot", help="draw a plan written by 'rpr3-gwr plan'")
     plot.add_argument("plan_file", metavar="PLAN.json")
     plot.add_argument("-o", "--output", help="figure file (default: PLAN.png beside the plan)")
@@ -110,6 +115,12 @@ class _Progress:
             end = "\n" if fraction >= 1.0 else ""
             self.stream.write(f"\r\x1b[K[{fraction:4.0%}] {stage} ({elapsed:.1f} s)" + end)
             self.stream.flush()
+
+
+def _cusps(args):
+    roadmap, _ = cached_roadmap(PAPER_GEOMETRY, rho1_slice(args.rho1), args.cache_dir,
+                                _Progress(sys.stderr))
+    return [c.to_dict(PAPER_GEOMETRY) for c in find_cusps(roadmap)]
 
 
 def _dk(args):
@@ -194,6 +205,7 @@ def main(argv=None):
     parser = _parser()
     args = parser.parse_args(argv)
     commands = {"dk": lambda a: (_dk(a), 0), "roadmap": lambda a: (_roadmap(a), 0),
+                "cusps": lambda a: (_cusps(a), 0),
                 "plan": _plan, "plot": _plot}
     try:
         result, code = commands[args.command](args)

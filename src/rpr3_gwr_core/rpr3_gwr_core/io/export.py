@@ -16,6 +16,8 @@ the mechanism's length unit, angles in radians::
       "gates": [{"patches": [id, id], "width": float,
                  "faces": [[cell in first patch, cell in second patch], ...]}],
       "aspect_groups": [[patch id, ...], ...],
+      "cusps": [{joint and pose coordinates by name, "regions": [...]}, ...],
+               # empty unless a 2-D slice of a mechanism with cusp equations
       "field": {                      # optional; needed to plan from the file
         "count": base64 of uint8[n_cells],
         "poses": base64 of little-endian float64[n_cells, max_solutions,
@@ -47,6 +49,7 @@ from ..mechanisms import mechanism_from_dict
 from ..workspace import (Grid, NSolutionField, Roadmap, Segmentation, aspect_groups,
                          roadmap_graph)
 from ..workspace.continuity import neighbour_pairs
+from ..workspace.cusps import known_cusps
 
 __all__ = ["roadmap_summary", "roadmap_to_json", "roadmap_from_json", "roadmap_to_gexf"]
 
@@ -92,7 +95,8 @@ def roadmap_summary(roadmap, with_faces=False):
     return {"format": FORMAT, "version": VERSION,
             "mechanism": seg.field.mechanism.to_dict(), "grid": seg.field.grid.to_dict(),
             "regions": regions, "patches": patches, "gates": gates,
-            "aspect_groups": aspect_groups(roadmap.graph)}
+            "aspect_groups": aspect_groups(roadmap.graph),
+            "cusps": [c.to_dict(roadmap.mechanism) for c in known_cusps(roadmap)]}
 
 
 def _encode(array, dtype):

@@ -11,6 +11,7 @@ from scipy.ndimage import distance_transform_cdt
 
 from ..exceptions import InvalidInputError
 from ..workspace import aspect_groups
+from ..workspace.cusps import known_cusps
 
 __all__ = ["field_figure", "roadmap_figure", "plan_figure"]
 
@@ -19,8 +20,9 @@ def field_figure(roadmap):
     """The n-solution field with its region ids, as the paper's figure 6.
 
     Cells are coloured by their number of solutions; region ids are written
-    at each region's most interior cell; cells of no region are white and the
-    boundaries between regions are drawn dark.
+    at each region's most interior cell; cells of no region are white, the
+    boundaries between regions are drawn dark and the cusps of the singular
+    curve are marked.
 
     Parameters
     ----------
@@ -51,6 +53,10 @@ def field_figure(roadmap):
         ax.text(u[i], v[j], str(r), ha="center", va="center", fontsize=10,
                 bbox={"boxstyle": "circle", "fc": "white", "ec": "k"})
     fig.colorbar(image, ax=ax, label="number of solutions")
+    cusps = np.array([c.joints[list(grid.axis_joints)] for c in known_cusps(roadmap)])
+    if cusps.size:
+        ax.plot(cusps[:, 0], cusps[:, 1], "r^", ms=8, label="cusp")
+        ax.legend(loc="upper left")
     ax.set_xlabel(labels[0])
     ax.set_ylabel(labels[1])
     ax.set_title(f"n-solution field and regions{fixed}")

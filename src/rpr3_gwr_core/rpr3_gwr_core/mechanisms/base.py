@@ -143,6 +143,29 @@ class Mechanism(abc.ABC):
     def to_dict(self):
         """Plain data with a ``"kind"`` key, for JSON, messages and cache keys."""
 
+    def refine_cusp(self, pose, fixed):
+        """Newton from a pose to a cusp point of a 2-D slice: a point where
+        three direct-kinematic solutions merge.
+
+        Parameters
+        ----------
+        pose : array_like, shape (pose_size,)
+            A pose near the cusp.
+        fixed : mapping of int to float
+            The joints the slice fixes and their values.
+
+        Returns
+        -------
+        (ndarray, ndarray) or None
+            The cusp's pose and joints, or None when Newton does not converge.
+
+        Raises
+        ------
+        NotImplementedError
+            For mechanisms (or slices) without cusp equations.
+        """
+        raise NotImplementedError(f"{self.kind} has no cusp equations")
+
     def check_joints(self, joints):
         """Raise ``InvalidInputError`` for joint values the mechanism cannot take.
 

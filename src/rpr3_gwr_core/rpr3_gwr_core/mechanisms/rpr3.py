@@ -213,6 +213,11 @@ class Geometry(Mechanism):
     def step(self, pose, joints_from, joints_to):
         return _step(self, pose, joints_from, joints_to)
 
+    def refine_cusp(self, pose, fixed):
+        if set(fixed) != {0}:
+            raise InvalidInputError("cusp equations are written for slices at fixed rho1")
+        return _refine_cusp(self, pose, float(fixed[0]))
+
 
 PAPER_GEOMETRY = Geometry()
 
@@ -508,6 +513,76 @@ def _step(geometry, pose, rho_from, rho_to):
             return None
         x, y, alpha = x - 0.5 * dx / det, y - 0.5 * dy / det, alpha - 0.5 * da / det
     return None
+
+
+# --- cusps of the slices at fixed rho1 ----------------------------------------------
+#
+# At fixed rho1 the poses are the torus (theta1, alpha): B1 = A1 + rho1 (cos
+# theta1, sin theta1), and the legs rho2, rho3 follow in closed form.  The
+# map phi(theta1, alpha) = (rho2**2, rho3**2) is singular where det(d phi) = 0
+# (the parallel singularities), and has a cusp where, moreover, the kernel
+# of d phi is tangent to that curve: grad(det d phi) . k = 0.  Newton on
+# these two equations in (theta1, alpha) uses the pose equations themselves,
+# so it is as well conditioned at the degenerate orientations as elsewhere.
+
+_CUSP_ITERATIONS = 40
+_CUSP_DIFFERENCE = 1e-7
+_CUSP_TOL = 1e-12
+
+
+def _cusp_equations(geometry, theta, alpha, rho1):
+    """``(det d phi, grad(det d phi) . k)`` with ``k`` the unit kernel of d phi,
+    and the squared legs ``(rho2**2, rho3**2)``."""
+    (a1x, a1y), a2, a3 = geometry.a1, np.array(geometry.a2), np.array(geometry.a3)
+    r = rho1 * np.array([math.cos(theta), math.sin(theta)])
+    t = rho1 * np.array([-math.sin(theta), math.cos(theta)])
+    b1 = np.array([a1x, a1y]) + r
+    rows, d_theta, d_alpha, legs = [], [], [], []
+    for a, d, phase in ((a2, geometry.d1, alpha), (a3, geometry.d3, alpha + geometry.beta)):
+        e = d * np.array([math.cos(phase), math.sin(phase)])
+        e_prime = d * np.array([-math.sin(phase), math.cos(phase)])
+        u = b1 + e - a
+        rows.append((2 * u @ t, 2 * u @ e_prime))
+        d_theta.append((2 * (rho1 * rho1 - u @ r), 2 * e_prime @ t))
+        d_alpha.append((2 * t @ e_prime, 2 * (d * d - u @ e)))
+        legs.append(u @ u)
+    (a, b), (c, d) = rows
+    det = a * d - b * c
+
+    def derivative(partial):
+        (pa, pb), (pc, pd) = partial
+        return pa * d + a * pd - pb * c - b * pc
+
+    kernel = np.array([b, -a]) if a * a + b * b >= c * c + d * d else np.array([d, -c])
+    kernel = kernel / np.linalg.norm(kernel)
+    tangent = derivative(d_theta) * kernel[0] + derivative(d_alpha) * kernel[1]
+    return np.array([det, tangent]), legs
+
+
+def _refine_cusp(geometry, pose, rho1):
+    x, y, alpha = (float(v) for v in pose)
+    point = np.array([math.atan2(y - geometry.a1[1], x - geometry.a1[0]), alpha])
+    h = _CUSP_DIFFERENCE
+    for _ in range(_CUSP_ITERATIONS):
+        value, _ = _cusp_equations(geometry, *point, rho1)
+        jacobian = np.column_stack([
+            (_cusp_equations(geometry, *(point + step), rho1)[0]
+             - _cusp_equations(geometry, *(point - step), rho1)[0]) / (2 * h)
+            for step in (np.array([h, 0.0]), np.array([0.0, h]))])
+        try:
+            move = np.linalg.solve(jacobian, -value)
+        except np.linalg.LinAlgError:
+            return None
+        point = point + move
+        if np.max(np.abs(move)) < _CUSP_TOL:
+            break
+    else:
+        return None
+    theta, alpha = point
+    _, legs = _cusp_equations(geometry, theta, alpha, rho1)
+    b1 = np.array(geometry.a1) + rho1 * np.array([math.cos(theta), math.sin(theta)])
+    cusp_pose = np.array([b1[0], b1[1], float(wrap_angle(alpha))])
+    return cusp_pose, np.array([rho1, math.sqrt(legs[0]), math.sqrt(legs[1])])
 
 
 # --- direct kinematics ---------------------------------------------------------

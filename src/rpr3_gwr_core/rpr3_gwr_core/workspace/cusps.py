@@ -1,0 +1,138 @@
+"""Cusp points of the singular curve of a 2-D roadmap (paper section 1: the
+3-RPR changes assembly mode around them, figure 13).
+
+At a cusp three direct-kinematic solutions merge.  Seeds come from the
+field: in cells near a cusp, three solutions of mixed aspect lie close
+together (two fold pairs meeting), and the closer they are, the nearer the
+cusp.  The seeds are thinned so that one cluster of
+cells gives one seed, and each is refined by the mechanism's Newton on its
+pose equations (:meth:`~rpr3_gwr_core.mechanisms.Mechanism.refine_cusp`).
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..exceptions import InvalidInputError, OutOfGridError
+
+__all__ = ["Cusp", "find_cusps", "known_cusps"]
+
+# One seed per ball of this many grid steps, the closest triples first.
+_SEED_SPACING = 8.0
+_MAX_SEEDS = 48
+# Two refined cusps closer than this (relative to the scale) are one.
+_SAME_CUSP = 1e-6
+# Regions whose cells lie within this many steps of a cusp meet there.
+_REGION_REACH = 8
+
+
+@dataclass(frozen=True)
+class Cusp:
+    """A cusp point of a slice's singular curve.
+
+    Attributes
+    ----------
+    joints : ndarray, shape (n_joints,)
+    pose : ndarray, shape (pose_size,)
+        The pose where the three solutions merge.
+    regions : tuple of int
+        The regions of the cells around it.
+    """
+
+    joints: np.ndarray
+    pose: np.ndarray
+    regions: tuple
+
+    def to_dict(self, mechanism):
+        """Plain data: joints and pose by name, and the regions."""
+        return {**{n: float(v) for n, v in zip(mechanism.joint_names, self.joints)},
+                **{n: float(v) for n, v in zip(mechanism.pose_names, self.pose)},
+                "regions": list(self.regions)}
+
+
+def find_cusps(roadmap):
+    """The cusp points of a 2-D roadmap's singular curve inside its grid.
+
+    Parameters
+    ----------
+    roadmap : Roadmap
+        On a grid of two axes.
+
+    Returns
+    -------
+    list of Cusp
+        Sorted by their joints.
+
+    Raises
+    ------
+    InvalidInputError
+        If the grid does not have two axes.
+    """
+    grid, field = roadmap.grid, roadmap.field
+    mechanism = field.mechanism
+    if grid.ndim != 2:
+        raise InvalidInputError(f"cusps are points of 2-D slices, the grid has {grid.ndim} axes")
+    fixed = dict(grid.fixed)
+    found = []
+    for seed in _seeds(field):
+        refined = mechanism.refine_cusp(seed, fixed)
+        if refined is None:
+            continue
+        pose, joints = refined
+        try:
+            cell = grid.cell_of(joints)
+        except OutOfGridError:
+            continue
+        if any(np.max(np.abs(joints - c.joints)) < _SAME_CUSP * mechanism.scale for c in found):
+            continue
+        found.append(Cusp(joints=joints, pose=pose, regions=_regions_around(roadmap, cell)))
+    return sorted(found, key=lambda c: tuple(c.joints))
+
+
+def known_cusps(roadmap):
+    """:func:`find_cusps`, or ``[]`` where the grid is no 2-D slice or the
+    mechanism has no cusp equations for it."""
+    try:
+        return find_cusps(roadmap)
+    except (InvalidInputError, NotImplementedError):
+        return []
+
+
+def _seeds(field):
+    """Poses of close triples of solutions of mixed aspect, one per cluster of
+    cells, closest triples first.  A triple is a solution and its two
+    nearest in pose (not in the solutions' order: at a degenerate
+    orientation of the 3-RPR a fourth solution shares the orientation)."""
+    mechanism, grid = field.mechanism, field.grid
+    cells = np.flatnonzero(field.count >= 3)
+    poses, aspect = field.poses[cells], field.aspect[cells]
+    distance = mechanism.pose_distance(poses[:, :, None, :], poses[:, None, :, :])
+    slots = np.arange(field.max_solutions)
+    distance[:, slots, slots] = np.inf
+    distance = np.where(np.isnan(distance), np.inf, distance)
+    nearest = np.argsort(distance, axis=2)[:, :, :2]
+    rows = np.arange(cells.size)[:, None]
+    j, k = nearest[..., 0], nearest[..., 1]
+    spread = np.maximum(np.take_along_axis(distance, nearest, axis=2).max(axis=2),
+                        distance[rows, j, k])
+    mixed = np.abs(aspect + np.take_along_axis(aspect, j, axis=1)
+                   + np.take_along_axis(aspect, k, axis=1)) == 1
+    row, slot = np.nonzero(mixed & np.isfinite(spread))
+    order = np.argsort(spread[row, slot], kind="stable")
+    coordinates = grid.coordinates()
+    taken = []
+    for r, k in zip(row[order], slot[order]):
+        here = coordinates[cells[r]]
+        if all(np.max(np.abs(here - coordinates[c])) > _SEED_SPACING * grid.step for c in taken):
+            taken.append(cells[r])
+            yield poses[r, k]
+            if len(taken) == _MAX_SEEDS:
+                return
+
+
+def _regions_around(roadmap, cell):
+    grid, seg = roadmap.grid, roadmap.segmentation
+    index = np.unravel_index(cell, grid.shape)
+    window = tuple(slice(max(0, i - _REGION_REACH), i + _REGION_REACH + 1) for i in index)
+    regions = seg.region.reshape(grid.shape)[window]
+    return tuple(int(r) for r in np.unique(regions[regions > 0]))
