@@ -15,7 +15,8 @@ def _interfaces():
 def test_the_package_ships_the_designed_interfaces():
     assert _interfaces() == [
         ("action", "ExecuteTrajectory"),
-        ("msg", "AxisLinks"), ("msg", "Configuration"), ("msg", "FixedJoint"), ("msg", "Gate"),
+        ("msg", "AxisLinks"), ("msg", "Configuration"), ("msg", "Cusp"), ("msg", "FixedJoint"),
+        ("msg", "Gate"),
         ("msg", "Geometry"), ("msg", "GlobalPath"), ("msg", "Grid"), ("msg", "GridAxis"),
         ("msg", "NSolutionField"), ("msg", "PlatformPose"), ("msg", "WorkspacePatch"),
         ("msg", "WorkspaceRoadmap"),

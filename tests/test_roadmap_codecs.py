@@ -9,6 +9,7 @@ import pytest
 from rpr3_gwr_core import PAPER_GEOMETRY, PAPER_GRID, Planner, PlanOptions, build_roadmap
 from rpr3_gwr_core.io.export import roadmap_from_json, roadmap_to_json
 from rpr3_gwr_core.exceptions import InvalidInputError
+from rpr3_gwr_core.workspace.cusps import find_cusps
 from rpr3_gwr_nodes.conversions import roadmap_from_msgs, roadmap_to_msgs
 from std_msgs.msg import Header
 
@@ -62,6 +63,13 @@ def test_decoded_roadmaps_plan_identically(built, decoded, start, goal):
         np.testing.assert_array_equal(plan.joints, reference.joints)
         np.testing.assert_array_equal(plan.poses, reference.poses)
         np.testing.assert_array_equal(plan.times, reference.times)
+
+
+def test_the_field_message_carries_the_cusps(built):
+    field_msg, _ = roadmap_to_msgs(built, Header())
+    assert [list(c.legs) for c in field_msg.cusps] == [c.joints.tolist()
+                                                        for c in find_cusps(built)]
+    assert len(field_msg.cusps) == 6 and all(c.regions for c in field_msg.cusps)
 
 
 def test_a_roadmap_message_that_disagrees_with_its_field_is_refused(built):

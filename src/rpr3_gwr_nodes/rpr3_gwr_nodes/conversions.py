@@ -16,7 +16,9 @@ from rpr3_gwr_core.exceptions import InvalidInputError
 from rpr3_gwr_core.mechanisms import Geometry
 from rpr3_gwr_core.workspace import (Axis, Grid, NSolutionField, Roadmap, Segmentation,
                                      roadmap_graph)
-from rpr3_gwr_msgs.msg import AxisLinks, FixedJoint, GridAxis
+from rpr3_gwr_core.workspace.cusps import known_cusps
+from rpr3_gwr_msgs.msg import AxisLinks, FixedJoint, GridAxis, PlatformPose
+from rpr3_gwr_msgs.msg import Cusp as CuspMsg
 from rpr3_gwr_msgs.msg import Gate as GateMsg
 from rpr3_gwr_msgs.msg import Geometry as GeometryMsg
 from rpr3_gwr_msgs.msg import Grid as GridMsg
@@ -109,6 +111,11 @@ def roadmap_to_msgs(roadmap, header):
     field_msg.poses = _pack("d", field.poses, np.float64)
     field_msg.singularity_margin = _pack("d", field.margin, np.float64)
     field_msg.links = [AxisLinks(slots=_pack("b", match, np.int8)) for _, _, match in seg.links]
+    field_msg.cusps = [CuspMsg(legs=[float(v) for v in c.joints],
+                               pose=PlatformPose(x=float(c.pose[0]), y=float(c.pose[1]),
+                                                 alpha=float(c.pose[2])),
+                               regions=list(c.regions))
+                       for c in known_cusps(roadmap)]
     patches = [WorkspacePatch(id=p.id, region=p.region, layer=p.layer, aspect=p.aspect,
                               n_solutions=p.n_solutions, n_cells=int(p.cells.size),
                               area=roadmap.graph.nodes[p.id]["area"])
