@@ -22,9 +22,8 @@ os.environ.pop("ROS_STATIC_PEERS", None)
 os.environ["ROS_DOMAIN_ID"] = str(random.SystemRandom().randint(1, 100))
 
 
-@pytest.fixture
-def ros_context():
-    """A private rclpy context, shut down after the test."""
+def _private_context():
+    """A private rclpy context, shut down when the generator closes."""
     import rclpy
     from rclpy.context import Context
 
@@ -34,3 +33,15 @@ def ros_context():
         yield context
     finally:
         rclpy.try_shutdown(context=context)
+
+
+@pytest.fixture
+def ros_context():
+    """A private rclpy context, shut down after the test."""
+    yield from _private_context()
+
+
+@pytest.fixture(scope="module")
+def module_context():
+    """A private rclpy context for a test module's nodes, shut down after it."""
+    yield from _private_context()

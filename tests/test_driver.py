@@ -10,7 +10,6 @@ import time
 
 import numpy as np
 import pytest
-import rclpy
 from builtin_interfaces.msg import Duration
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from hypothesis import HealthCheck, given, settings, strategies as st
@@ -114,17 +113,12 @@ class DriverUnderTest:
 
 
 @pytest.fixture(scope="module")
-def rig():
-    from rclpy.context import Context
-
-    context = Context()
-    rclpy.init(context=context)
-    running = DriverUnderTest(context)
+def rig(module_context):
+    running = DriverUnderTest(module_context)
     try:
         yield running
     finally:
         running.close()
-        rclpy.try_shutdown(context=context)
 
 
 @pytest.mark.parametrize("configuration, code", [

@@ -10,7 +10,6 @@ import time
 
 import numpy as np
 import pytest
-import rclpy
 from hypothesis import HealthCheck, given, settings, strategies as st
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
@@ -82,17 +81,12 @@ class PlannerUnderTest:
 
 
 @pytest.fixture(scope="module")
-def service():
-    from rclpy.context import Context
-
-    context = Context()
-    rclpy.init(context=context)
-    running = PlannerUnderTest(context)
+def service(module_context):
+    running = PlannerUnderTest(module_context)
     try:
         yield running
     finally:
         running.close()
-        rclpy.try_shutdown(context=context)
 
 
 def _seconds(point):

@@ -24,17 +24,22 @@ def _trajectory(k):
     return msg
 
 
+def _publisher_to_the_recorder(node, depth):
+    publisher = node.create_publisher(JointTrajectory, "planned_trajectory", depth)
+    deadline = time.monotonic() + 30.0
+    while publisher.get_subscription_count() == 0 and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert publisher.get_subscription_count() == 1, "the recorder did not subscribe"
+    return publisher
+
+
 def test_bag_is_readable_after_sigint(ros_context, tmp_path):
     bag = tmp_path / "bag"
     process = subprocess.Popen([str(RECORDER), "--ros-args", "-p", f"bag_path:={bag}"],
                                env=os.environ.copy())
     node = Node("recorder_feeder", context=ros_context)
     try:
-        publisher = node.create_publisher(JointTrajectory, "planned_trajectory", 10)
-        deadline = time.monotonic() + 30.0
-        while publisher.get_subscription_count() == 0 and time.monotonic() < deadline:
-            time.sleep(0.1)
-        assert publisher.get_subscription_count() == 1, "the recorder did not subscribe"
+        publisher = _publisher_to_the_recorder(node, 10)
         for k in range(3):
             publisher.publish(_trajectory(k))
         time.sleep(1.0)
@@ -77,11 +82,7 @@ def test_a_killed_recorder_loses_at_most_the_last_second(ros_context, tmp_path, 
     node = Node("recorder_feeder", context=ros_context)
     sent = []
     try:
-        publisher = node.create_publisher(JointTrajectory, "planned_trajectory", 100)
-        deadline = time.monotonic() + 30.0
-        while publisher.get_subscription_count() == 0 and time.monotonic() < deadline:
-            time.sleep(0.1)
-        assert publisher.get_subscription_count() == 1, "the recorder did not subscribe"
+        publisher = _publisher_to_the_recorder(node, 100)
         # The recorder's side of the match may lag behind ours under load.
         time.sleep(0.5)
         start = time.monotonic()

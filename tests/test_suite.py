@@ -7,7 +7,6 @@ import time
 
 import numpy as np
 import pytest
-import rclpy
 from rclpy.action import ActionClient
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
@@ -116,17 +115,12 @@ class Suite:
 
 
 @pytest.fixture(scope="module")
-def suite(tmp_path_factory):
-    from rclpy.context import Context
-
-    context = Context()
-    rclpy.init(context=context)
-    running = Suite(context, tmp_path_factory.mktemp("bags") / "suite_bag")
+def suite(module_context, tmp_path_factory):
+    running = Suite(module_context, tmp_path_factory.mktemp("bags") / "suite_bag")
     try:
         yield running
     finally:
         running.close()
-        rclpy.try_shutdown(context=context)
 
 
 def regions(response):
