@@ -178,13 +178,6 @@ class Mechanism(abc.ABC):
         """``sign(margin)``: +1 or -1, 0 exactly on a singularity, int8, shape (...)."""
         return np.sign(self.margin(poses)).astype(np.int8)
 
-    def wrap(self, poses):
-        """Poses with their angles wrapped to (-pi, pi]."""
-        poses = np.array(poses, dtype=float)
-        for k in np.flatnonzero(self.angular):
-            poses[..., k] = np.pi - np.remainder(np.pi - poses[..., k], 2 * np.pi)
-        return poses
-
     def pose_difference(self, a, b):
         """``a - b`` with angles wrapped and measured as arc length at ``scale``."""
         difference = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)
