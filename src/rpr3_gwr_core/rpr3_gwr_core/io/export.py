@@ -9,6 +9,10 @@ the mechanism's length unit, angles in radians::
       "grid": {"axes": [{"joint": int, "min": float, "max": float,
                          "step": float}, ...],
                "fixed": [{"joint": int, "value": float}, ...]},
+          # or, for an adaptive grid: {"kind": "adaptive", "base": {a grid
+          # as above}, "refinement": int, "blocks": [refined block, ...]}
+      "refinement": {"base_cells": int, "refined_blocks": int,
+                     "fine_cells": int, "cells": int},   # adaptive grids only
       "regions": [{"id": int, "n_solutions": int, "cells": int}],
       "patches": [{"id": int, "region": int, "layer": int, "aspect": +1 | -1,
                    "n_solutions": int, "cells": int, "area": float,
@@ -32,7 +36,8 @@ the mechanism's length unit, angles in radians::
       }
     }
 
-Cells are flat row-major indices over the grid's axes.  Reading a document
+Cells are flat row-major indices over the grid's axes (on an adaptive grid:
+its cells in the order of :class:`~rpr3_gwr_core.workspace.adaptive.AdaptiveGrid`).  Reading a document
 back derives patches and gates from the field's arrays
 (:meth:`~rpr3_gwr_core.workspace.segmentation.Segmentation.from_arrays`),
 as the ROS nodes' message decoder does.
@@ -46,12 +51,12 @@ import numpy as np
 
 from ..exceptions import InvalidInputError
 from ..mechanisms import mechanism_from_dict
-from ..workspace import (Grid, NSolutionField, Roadmap, Segmentation, aspect_groups,
-                         roadmap_graph)
-from ..workspace.continuity import neighbour_pairs
+from ..workspace import NSolutionField, Roadmap, Segmentation, aspect_groups, roadmap_graph
+from ..workspace.adaptive import AdaptiveGrid, grid_from_dict
 from ..workspace.cusps import known_cusps
 
-__all__ = ["roadmap_summary", "roadmap_to_json", "roadmap_from_json", "roadmap_to_gexf"]
+__all__ = ["roadmap_summary", "roadmap_arrays", "roadmap_from_arrays", "roadmap_to_json",
+           "roadmap_from_json", "roadmap_to_gexf"]
 
 FORMAT = "rpr3-gwr-roadmap"
 VERSION = 2
@@ -71,7 +76,6 @@ def roadmap_summary(roadmap, with_faces=False):
     dict
     """
     seg = roadmap.segmentation
-    cell_volume = float(np.prod(seg.field.grid.steps))
     regions = []
     for r in range(1, seg.n_regions + 1):
         cells = np.flatnonzero(seg.region == r)
@@ -81,7 +85,7 @@ def roadmap_summary(roadmap, with_faces=False):
     for pid, patch in sorted(seg.patches.items()):
         entry = {"id": pid, "region": patch.region, "layer": patch.layer,
                  "aspect": patch.aspect, "n_solutions": patch.n_solutions,
-                 "cells": int(patch.cells.size), "area": float(patch.cells.size * cell_volume)}
+                 "cells": int(patch.cells.size), "area": seg.field.grid.volume_of(patch.cells)}
         if with_faces:
             entry["gate_cells"] = patch.gate_cells.tolist()
             entry["singular_cells"] = patch.singular_cells.tolist()
@@ -92,36 +96,79 @@ def roadmap_summary(roadmap, with_faces=False):
         if with_faces:
             entry["faces"] = gate.faces.tolist()
         gates.append(entry)
-    return {"format": FORMAT, "version": VERSION,
-            "mechanism": seg.field.mechanism.to_dict(), "grid": seg.field.grid.to_dict(),
-            "regions": regions, "patches": patches, "gates": gates,
-            "aspect_groups": aspect_groups(roadmap.graph),
-            "cusps": [c.to_dict(roadmap.mechanism) for c in known_cusps(roadmap)]}
+    grid = seg.field.grid
+    out = {"format": FORMAT, "version": VERSION,
+           "mechanism": seg.field.mechanism.to_dict(), "grid": grid.to_dict(),
+           "regions": regions, "patches": patches, "gates": gates,
+           "aspect_groups": aspect_groups(roadmap.graph),
+           "cusps": [c.to_dict(roadmap.mechanism) for c in known_cusps(roadmap)]}
+    if isinstance(grid, AdaptiveGrid):
+        out["refinement"] = {"base_cells": grid.base.size, "refined_blocks": int(grid.blocks.size),
+                             "fine_cells": grid.size - grid.base.size, "cells": grid.size}
+    return out
 
 
 def _encode(array, dtype):
     return base64.b64encode(np.ascontiguousarray(array, dtype=dtype).tobytes()).decode("ascii")
 
 
-def _decode(text, dtype, shape):
+def _decode(text, dtype):
     try:
-        array = np.frombuffer(base64.b64decode(text), dtype=dtype)
-        return array.reshape(shape).copy()
+        return np.frombuffer(base64.b64decode(text), dtype=dtype).copy()
     except (ValueError, TypeError) as exc:
         raise InvalidInputError(f"malformed field array: {exc}") from exc
+
+
+_FIELD_TYPES = {"count": "<u1", "poses": "<f8", "margin": "<f8", "region": "<i4",
+                "patch": "<i4"}
+
+
+def roadmap_arrays(roadmap):
+    """The arrays a roadmap is rebuilt from (the ``field`` section of the
+    schema, not encoded), by name; ``links`` is a list, one per axis."""
+    seg = roadmap.segmentation
+    return {"count": seg.field.count, "poses": seg.field.poses, "margin": seg.field.margin,
+            "region": seg.region, "patch": seg.patch,
+            "links": [match for _, _, match in seg.links]}
+
+
+def roadmap_from_arrays(mechanism_dict, grid_dict, arrays):
+    """A roadmap from its mechanism and grid documents and its arrays
+    (:func:`roadmap_arrays`); patches and gates are derived from the arrays.
+
+    Raises
+    ------
+    InvalidInputError
+        If the arrays do not fit the grid.
+    """
+    try:
+        mechanism = mechanism_from_dict(mechanism_dict)
+        grid = grid_from_dict(grid_dict)
+        n, slots, size = grid.size, mechanism.max_solutions, mechanism.pose_size
+        shapes = {"count": (n,), "poses": (n, slots, size), "margin": (n, slots),
+                  "region": (n,), "patch": (n, slots)}
+        array = {name: np.asarray(arrays[name]).reshape(shape) for name, shape in shapes.items()}
+        faces = grid.pairs()
+        if len(arrays["links"]) != len(faces):
+            raise InvalidInputError("links do not match the grid's axes")
+        links = [np.asarray(m).reshape(lo.size, slots)
+                 for (lo, _), m in zip(faces, arrays["links"])]
+    except (KeyError, TypeError, ValueError) as exc:
+        raise InvalidInputError(f"malformed roadmap arrays: {exc}") from exc
+    field = NSolutionField(mechanism=mechanism, grid=grid, count=array["count"],
+                           poses=array["poses"], margin=array["margin"])
+    segmentation = Segmentation.from_arrays(field, array["region"], array["patch"], links)
+    return Roadmap(segmentation=segmentation, graph=roadmap_graph(segmentation), timings={})
 
 
 def roadmap_to_json(roadmap, include_field=True):
     """Serialise a roadmap to a JSON string (schema in the module doc)."""
     data = roadmap_summary(roadmap, with_faces=True)
     if include_field:
-        seg = roadmap.segmentation
-        data["field"] = {"count": _encode(seg.field.count, "<u1"),
-                         "poses": _encode(seg.field.poses, "<f8"),
-                         "margin": _encode(seg.field.margin, "<f8"),
-                         "region": _encode(seg.region, "<i4"),
-                         "patch": _encode(seg.patch, "<i4"),
-                         "links": [_encode(match, "<i1") for _, _, match in seg.links]}
+        arrays = roadmap_arrays(roadmap)
+        data["field"] = {name: _encode(arrays[name], dtype)
+                         for name, dtype in _FIELD_TYPES.items()}
+        data["field"]["links"] = [_encode(match, "<i1") for match in arrays["links"]]
     return json.dumps(data)
 
 
@@ -144,30 +191,19 @@ def roadmap_from_json(text):
     if "field" not in data:
         raise InvalidInputError("the document has no field: write it with include_field=True")
     try:
-        mechanism = mechanism_from_dict(data["mechanism"])
-        grid = Grid.from_dict(data["grid"])
-        n, slots, size = grid.size, mechanism.max_solutions, mechanism.pose_size
         raw = data["field"]
-        field = NSolutionField(
-            mechanism=mechanism, grid=grid, count=_decode(raw["count"], "<u1", (n,)),
-            poses=_decode(raw["poses"], "<f8", (n, slots, size)),
-            margin=_decode(raw["margin"], "<f8", (n, slots)))
-        faces = neighbour_pairs(grid.shape)
-        if len(raw["links"]) != len(faces):
-            raise InvalidInputError("links do not match the grid's axes")
-        links = [_decode(text, "<i1", (lo.size, slots))
-                 for (lo, _), text in zip(faces, raw["links"])]
-        segmentation = Segmentation.from_arrays(
-            field, _decode(raw["region"], "<i4", (n,)), _decode(raw["patch"], "<i4", (n, slots)),
-            links)
+        arrays = {name: _decode(raw[name], dtype) for name, dtype in _FIELD_TYPES.items()}
+        arrays["links"] = [_decode(text, "<i1") for text in raw["links"]]
+        roadmap = roadmap_from_arrays(data["mechanism"], data["grid"], arrays)
         # The summary sections must describe the roadmap the arrays make.
         listed = ({int(p["id"]) for p in data["patches"]},
                   {tuple(int(i) for i in g["patches"]) for g in data["gates"]})
     except (KeyError, TypeError, ValueError) as exc:
         raise InvalidInputError(f"malformed roadmap document: {exc}") from exc
-    if listed != (set(segmentation.patches), set(segmentation.gates)):
+    seg = roadmap.segmentation
+    if listed != (set(seg.patches), set(seg.gates)):
         raise InvalidInputError("the document's patches and gates do not match its field")
-    return Roadmap(segmentation=segmentation, graph=roadmap_graph(segmentation), timings={})
+    return roadmap
 
 
 def roadmap_to_gexf(roadmap):

@@ -2,11 +2,12 @@
 (paper section 3.3).
 
 Every cell of a patch costs ``1 + clearance_weight / d``, where ``d`` is its
-Euclidean distance in cells to the nearest cell outside the patch (singular
-edge, gate, other region or grid edge alike, as in the paper), so paths keep
-clear of every boundary until they must cross the planned gate; cells whose
-solution is nearly singular cost a hundred times more on top.  Moving
-between 4-connected cells costs the step times the mean cost of the two.
+distance in cells to the nearest cell outside the patch (singular edge, gate,
+other region or grid edge alike, as in the paper; Euclidean on uniform grids,
+along faces on adaptive ones), so paths keep clear of every boundary until
+they must cross the planned gate; cells whose solution is nearly singular
+cost a hundred times more on top.  Moving between face-adjacent cells costs
+their distance times the mean cost of the two.
 
 Rather than planning patch by patch to a chosen gate cell, the patches of a
 global path are stacked as layers of one directed graph: edges inside a layer
@@ -22,7 +23,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sparse
-from scipy.ndimage import distance_transform_edt
 from scipy.sparse.csgraph import dijkstra
 
 from ..exceptions import InfeasiblePathError, InvalidInputError
@@ -90,29 +90,44 @@ class LocalPlanner:
         self.clearance_weight = float(clearance_weight)
         self.low_margin = float(low_margin)
         self._profiles = {}
-        self._links = self._links_by_patch()
+        self._links, self._face_keys, self._face_lengths = self._links_by_patch()
 
     def _links_by_patch(self):
         """Per patch, the (lower, upper) cells of its continuation links and
-        the step of each link's axis."""
+        their lengths; and the lengths of the gates' faces, by face key
+        ``lower * n_cells + upper``."""
         seg = self.segmentation
+        n_cells = seg.field.grid.size
         found = {}
-        for (lower, upper, match), step in zip(seg.links, seg.field.grid.steps):
+        face_keys, face_lengths = [np.zeros(0, np.int64)], [np.zeros(0)]
+        for (lower, upper, match), lengths in zip(seg.links, seg.field.grid.pair_lengths()):
             rows, slots = np.nonzero(match >= 0)
             a = seg.patch[lower[rows], slots]
             b = seg.patch[upper[rows], match[rows, slots].astype(np.int64)]
+            gate = (a != b) & (a > 0) & (b > 0)
+            face_keys.append(lower[rows][gate] * n_cells + upper[rows][gate])
+            face_lengths.append(lengths[rows][gate])
             keep = (a == b) & (a > 0)
-            pids, lo, up = a[keep], lower[rows][keep], upper[rows][keep]
+            pids, lo, up, length = a[keep], lower[rows][keep], upper[rows][keep], \
+                lengths[rows][keep]
             order = np.argsort(pids, kind="stable")
-            pids, lo, up = pids[order], lo[order], up[order]
+            pids, lo, up, length = pids[order], lo[order], up[order], length[order]
             bounds = np.flatnonzero(np.diff(pids)) + 1
-            for chunk_p, chunk_lo, chunk_up in zip(np.split(pids, bounds), np.split(lo, bounds),
-                                                   np.split(up, bounds)):
-                if chunk_p.size:
-                    found.setdefault(int(chunk_p[0]), []).append(
-                        (chunk_lo, chunk_up, np.full(chunk_lo.size, step)))
-        return {pid: tuple(np.concatenate([link[k] for link in v]) for k in range(3))
-                for pid, v in found.items()}
+            for chunk in zip(np.split(pids, bounds), np.split(lo, bounds), np.split(up, bounds),
+                             np.split(length, bounds)):
+                if chunk[0].size:
+                    found.setdefault(int(chunk[0][0]), []).append(chunk[1:])
+        links = {pid: tuple(np.concatenate([link[k] for link in v]) for k in range(3))
+                 for pid, v in found.items()}
+        face_keys, face_lengths = np.concatenate(face_keys), np.concatenate(face_lengths)
+        order = np.argsort(face_keys)
+        return links, face_keys[order], face_lengths[order]
+
+    def _face_length(self, cells_a, cells_b):
+        """Length of gate faces given by their two cells [joint unit]."""
+        n_cells = self.segmentation.field.grid.size
+        keys = np.minimum(cells_a, cells_b) * n_cells + np.maximum(cells_a, cells_b)
+        return self._face_lengths[np.searchsorted(self._face_keys, keys)]
 
     def profile(self, pid):
         """The patch's cells, clearance costs and weighted links (cached)."""
@@ -129,13 +144,10 @@ class LocalPlanner:
         """
         seg = self.segmentation
         patch = seg.patches[pid]
-        shape = seg.field.grid.shape
         own = seg.region[patch.cells] == patch.region
-        mask = np.zeros(shape, dtype=bool)
-        mask.flat[patch.cells[own]] = True
-        inner = tuple(slice(1, -1) for _ in shape)
-        depth = distance_transform_edt(np.pad(mask, 1))[inner]
-        return np.where(own, depth.ravel()[patch.cells], _UNRESOLVED_DEPTH)
+        depth = np.full(patch.cells.size, _UNRESOLVED_DEPTH)
+        depth[own] = seg.field.grid.depth(patch.cells[own])
+        return depth
 
     def _build_profile(self, pid):
         patch = self.segmentation.patches[pid]
@@ -144,10 +156,10 @@ class LocalPlanner:
         # far more, so a path crosses them only where nothing else leads on.
         margin = np.abs(self.segmentation.field.margin[patch.cells, patch.slots])
         cost = np.where(margin < self.low_margin, cost * _LOW_MARGIN_FACTOR, cost)
-        lower, upper, step = self._links.get(pid, (np.zeros(0, int), np.zeros(0, int),
-                                                   np.zeros(0)))
+        lower, upper, length = self._links.get(pid, (np.zeros(0, int), np.zeros(0, int),
+                                                     np.zeros(0)))
         lower, upper = np.searchsorted(patch.cells, lower), np.searchsorted(patch.cells, upper)
-        weight = 0.5 * step * (cost[lower] + cost[upper])
+        weight = 0.5 * length * (cost[lower] + cost[upper])
         return _Profile(cells=patch.cells, slots=patch.slots, cost=cost, lower=lower,
                         upper=upper, weight=weight)
 
@@ -196,7 +208,6 @@ class LocalPlanner:
             rows += [lower + offsets[k], upper + offsets[k]]
             cols += [upper + offsets[k], lower + offsets[k]]
             weights += [weight, weight]
-        step = seg.field.grid.step
         for k, (a, b) in enumerate(zip(patches, patches[1:])):
             gate = seg.gates.get((min(a, b), max(a, b)))
             if gate is None:
@@ -206,7 +217,8 @@ class LocalPlanner:
             la, lb = profiles[k].local(cells_a), profiles[k + 1].local(cells_b)
             rows.append(la + offsets[k])
             cols.append(lb + offsets[k + 1])
-            weights.append(0.5 * step * (profiles[k].cost[la] + profiles[k + 1].cost[lb]))
+            weights.append(0.5 * self._face_length(cells_a, cells_b)
+                           * (profiles[k].cost[la] + profiles[k + 1].cost[lb]))
         n = int(offsets[-1])
         graph = sparse.csr_matrix((np.concatenate(weights),
                                    (np.concatenate(rows), np.concatenate(cols))),

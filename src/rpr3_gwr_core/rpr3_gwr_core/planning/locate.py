@@ -19,7 +19,6 @@ configurations to the cell path through validated steps.
 """
 
 from dataclasses import dataclass
-import itertools
 import math
 
 import numpy as np
@@ -133,7 +132,7 @@ def locate(roadmap, configuration, mode_tol=DEFAULT_MODE_TOL, min_margin=DEFAULT
     if abs(margin) < min_margin:
         raise SingularityError(f"configuration is singular: margin {abs(margin):.2e} "
                                f"< {min_margin:g}")
-    for cell in _nearby_cells(grid, joints):
+    for cell in grid.cells_near(joints, _SEARCH_RADIUS):
         slot = _joined_slot(roadmap, joints, pose, cell, min_margin, max_step)
         if slot >= 0:
             return Location(joints=joints, pose=pose, margin=margin, cell=cell, slot=slot,
@@ -155,23 +154,6 @@ def _no_mode_message(mechanism, poses, wanted, mode_tol, joints):
     shown = ", ".join(f"{v:.4g}" for v in poses[:, k])
     return (f"no assembly mode within {mode_tol:g} of {name} = {wanted:g} at {joints}; "
             f"solutions at [{shown}]")
-
-
-def _nearby_cells(grid, joints):
-    """Flat indices of the cells within ``_SEARCH_RADIUS`` steps, nearest first."""
-    reach = int(math.ceil(_SEARCH_RADIUS))
-    centre = [int(round((joints[a.joint] - a.low) / a.step)) for a in grid.axes]
-    offsets = np.array(list(itertools.product(range(-reach, reach + 1), repeat=grid.ndim)))
-    index = np.array(centre) + offsets
-    inside = np.all((index >= 0) & (index < np.array(grid.shape)), axis=1)
-    index = index[inside]
-    low = np.array([a.low for a in grid.axes])
-    steps = np.array(grid.steps)
-    here = np.array([joints[a.joint] for a in grid.axes])
-    distance = np.linalg.norm((low + index * steps - here) / steps, axis=1)
-    near = distance <= _SEARCH_RADIUS
-    cells = np.ravel_multi_index(tuple(index[near].T), grid.shape)
-    return cells[np.lexsort((cells, distance[near]))].tolist()
 
 
 def _joined_slot(roadmap, joints, pose, cell, min_margin, max_step):

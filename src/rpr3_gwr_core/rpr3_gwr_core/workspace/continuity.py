@@ -17,6 +17,7 @@ import numpy as np
 
 __all__ = ["neighbour_pairs", "match_solutions"]
 
+_CHUNK = 65536
 _CORRECTOR_STEPS = 4
 _SUBSTEPS = (1, 16)
 # A continued pose that lands within this distance (relative to the
@@ -108,6 +109,15 @@ def match_solutions(field, lower, upper, screen=True):
     """
     joints = field.grid.joints()
     lower, upper = np.asarray(lower), np.asarray(upper)
+    match = np.full((len(lower), field.max_solutions), -1, dtype=np.int8)
+    # Faces are independent: chunks bound the temporaries, which scale with faces.
+    for start in range(0, len(lower), _CHUNK):
+        part = slice(start, start + _CHUNK)
+        match[part] = _match_chunk(field, joints, lower[part], upper[part], screen)
+    return match
+
+
+def _match_chunk(field, joints, lower, upper, screen):
     match = np.full((len(lower), field.max_solutions), -1, dtype=np.int8)
     if screen:
         settled = _screened(field, joints, lower, upper)

@@ -8,12 +8,15 @@ in their order: cell ``(i, j)`` of a 2-D grid is ``i * n_1 + j``.
 """
 
 from dataclasses import dataclass
+import itertools
 import math
 import numbers
 
 import numpy as np
+from scipy.ndimage import distance_transform_edt
 
 from ..exceptions import InvalidInputError, OutOfGridError
+from .continuity import neighbour_pairs
 
 __all__ = ["Axis", "Grid"]
 
@@ -226,6 +229,69 @@ class Grid:
         clipped = [np.clip(i, 0, a.count - 1) for i, a in zip(index, self.axes)]
         return np.where(inside, np.ravel_multi_index(clipped, self.shape), -1)
 
+    def pairs(self):
+        """Face-adjacent cell pairs, one ``(lower, upper)`` pair of flat-index
+        arrays per axis, ``upper = lower + stride`` of that axis."""
+        return neighbour_pairs(self.shape)
+
+    def pair_lengths(self):
+        """Per axis, the length of each pair of :meth:`pairs` [joint unit]."""
+        return [np.full(lower.size, step) for (lower, _), step in zip(self.pairs(), self.steps)]
+
+    def face_measures(self):
+        """Per axis, the measure of the face each pair crosses: the product of
+        the other axes' steps [joint unit**(d - 1)]."""
+        steps = np.array(self.steps)
+        return [np.full(lower.size, float(np.prod(np.delete(steps, axis))))
+                for axis, (lower, _) in enumerate(self.pairs())]
+
+    def cell_volumes(self):
+        """Volume each cell stands for, shape (size,) [joint unit**d]."""
+        return np.full(self.size, float(np.prod(self.steps)))
+
+    def volume_of(self, cells):
+        """Volume a set of cells stands for [joint unit**d]."""
+        return float(np.size(cells) * np.prod(self.steps))
+
+    def depth(self, cells):
+        """Euclidean distance of each given cell to the nearest cell not given,
+        outside the grid included [steps].
+
+        Parameters
+        ----------
+        cells : ndarray of int, shape (k,)
+            Flat indices, ascending.
+
+        Returns
+        -------
+        ndarray, shape (k,)
+        """
+        mask = np.zeros(self.shape, dtype=bool)
+        mask.flat[cells] = True
+        inner = tuple(slice(1, -1) for _ in self.shape)
+        return distance_transform_edt(np.pad(mask, 1))[inner].ravel()[cells]
+
+    def cells_near(self, joints, radius):
+        """Cells within ``radius`` steps of a joint vector, nearest first.
+
+        Returns
+        -------
+        list of int
+        """
+        reach = int(math.ceil(radius))
+        centre = [int(round((joints[a.joint] - a.low) / a.step)) for a in self.axes]
+        offsets = np.array(list(itertools.product(range(-reach, reach + 1), repeat=self.ndim)))
+        index = np.array(centre) + offsets
+        inside = np.all((index >= 0) & (index < np.array(self.shape)), axis=1)
+        index = index[inside]
+        low = np.array([a.low for a in self.axes])
+        steps = np.array(self.steps)
+        here = np.array([joints[a.joint] for a in self.axes])
+        distance = np.linalg.norm((low + index * steps - here) / steps, axis=1)
+        near = distance <= radius
+        cells = np.ravel_multi_index(tuple(index[near].T), self.shape)
+        return cells[np.lexsort((cells, distance[near]))].tolist()
+
     def to_dict(self):
         """Plain-data form, for JSON and cache keys."""
         return {"axes": [{"joint": a.joint, "min": a.low, "max": a.high, "step": a.step}
@@ -241,3 +307,4 @@ class Grid:
                        fixed=tuple((f["joint"], f["value"]) for f in data["fixed"]))
         except (KeyError, TypeError) as exc:
             raise InvalidInputError(f"malformed grid: {exc}") from exc
+

@@ -9,7 +9,6 @@ from dataclasses import dataclass
 from time import perf_counter
 
 import networkx as nx
-import numpy as np
 
 from .field import compute_field
 from .segmentation import segment
@@ -62,12 +61,12 @@ def roadmap_graph(segmentation):
     -------
     networkx.Graph
     """
-    cell_volume = float(np.prod(segmentation.field.grid.steps))
+    grid = segmentation.field.grid
     graph = nx.Graph()
     for pid, patch in segmentation.patches.items():
         graph.add_node(pid, region=patch.region, layer=patch.layer, aspect=patch.aspect,
                        n_solutions=patch.n_solutions, n_cells=int(patch.cells.size),
-                       area=float(patch.cells.size * cell_volume))
+                       area=grid.volume_of(patch.cells))
     for (a, b), gate in segmentation.gates.items():
         graph.add_edge(a, b, width=float(gate.width), n_faces=int(len(gate.faces)))
     return graph

@@ -5,8 +5,8 @@ Definitions (paper sections 2 to 4):
 * A *region* is a maximal set of 4-connected cells with the same number of
   solutions whose solutions all continue from cell to cell
   (:mod:`~rpr3_gwr_core.continuity`).  Regions are numbered 1..R by
-  decreasing number of cells (ties: lowest first cell), which reproduces the
-  numbering of the paper's figure 6.
+  decreasing volume (on a uniform grid: number of cells; ties: lowest first
+  cell), which reproduces the numbering of the paper's figure 6.
 * Unresolved cells.  Right on the singular locus a straight step between two
   cells can cross a fold and come back, and a sliver of the field thinner
   than a cell (a fold pair that is real over a tongue narrower than the step)
@@ -22,6 +22,15 @@ Definitions (paper sections 2 to 4):
   the number of digits of the mechanism's most solutions (``10 * region +
   layer`` for the 3-RPR's six), so ids never clash; the data model does not
   decode them: a :class:`Patch` carries its region and layer.
+* Sheets that do not come back to themselves.  Over the full 3-DOF space a
+  region's solutions can be exchanged by going around a loop inside it (the
+  4-solution region of the 3-RPR's [1, 50] x [0, 50]**2 box does: a single
+  connected sheet covers each of its cells twice).  Such a region is cut into
+  one patch per solution of its first cell, each solution carried to the
+  other cells along a breadth-first tree of the region; the faces where the
+  tree's branches meet with exchanged solutions become gates between the
+  region's own patches, so no connection is lost.  Uniform slices at fixed
+  rho1 have no such region.
 * Only the ill-conditioned solutions of unresolved cells are dropped: a set of
   their solutions connected by continuation joins the patch it continues
   into (the one it has most links with; ties: lowest id), since its sheet is
@@ -46,10 +55,10 @@ from dataclasses import dataclass, field as dataclass_field
 
 import numpy as np
 import scipy.sparse as sparse
-from scipy.sparse.csgraph import connected_components
+from scipy.sparse.csgraph import breadth_first_order, connected_components
 
 from ..exceptions import InvalidInputError
-from .continuity import match_solutions, neighbour_pairs
+from .continuity import match_solutions
 from .rotary_disk import passage_from_links, rotary_disk_search
 
 __all__ = ["Patch", "Gate", "Segmentation", "segment"]
@@ -157,7 +166,7 @@ class Segmentation:
         patch : ndarray of int, shape (n_cells, max_solutions)
         links : list of ndarray of int8, shape (n_faces_of_axis, max_solutions)
             Per axis, the continuation links of the faces in the order of
-            :func:`~rpr3_gwr_core.workspace.continuity.neighbour_pairs`.
+            the grid's ``pairs()``.
 
         Raises
         ------
@@ -165,7 +174,7 @@ class Segmentation:
             If the arrays do not fit the field's grid.
         """
         n, slots = field.grid.size, field.max_solutions
-        pairs = neighbour_pairs(field.grid.shape)
+        pairs = field.grid.pairs()
         region = np.asarray(region)
         patch = np.asarray(patch)
         if (region.shape != (n,) or patch.shape != (n, slots) or len(links) != len(pairs)
@@ -197,7 +206,7 @@ def segment(field, method="components", min_region_cells=8):
         raise InvalidInputError(f"method must be one of {METHODS}, got {method!r}")
     if int(min_region_cells) < 1:
         raise InvalidInputError("min_region_cells must be at least 1")
-    pairs = neighbour_pairs(field.grid.shape)
+    pairs = field.grid.pairs()
     # One thread per axis: the work is numpy's, which releases the GIL.
     with ThreadPoolExecutor(max_workers=len(pairs)) as pool:
         matches = list(pool.map(lambda pair: match_solutions(field, *pair), pairs))
@@ -207,10 +216,11 @@ def segment(field, method="components", min_region_cells=8):
     n_disks = field.grid.size * field.max_solutions
     valid = (field.valid & (region[:, None] > 0)).ravel()
     if method == "rds":
-        component = _components_by_rds(valid, disk_links, len(field.grid.shape))
+        component = _components_by_rds(valid, disk_links, field.grid.ndim)
     else:
         component = _components_by_csgraph(valid, disk_links, n_disks)
-    patch = _absorb_unresolved(field, region, _number_patches(field, region, component), links)
+    patch = _absorb_unresolved(field, region,
+                               _number_patches(field, region, component, disk_links), links)
     return Segmentation.from_arrays(field, region, patch, [m for _, _, m in links])
 
 
@@ -228,10 +238,12 @@ def _regions(field, links, min_cells):
     _, label = connected_components(graph, directed=False)
     occupied = count > 0
     sizes = np.bincount(label[occupied], minlength=label.max() + 1)
+    volumes = np.bincount(label[occupied], weights=field.grid.cell_volumes()[occupied],
+                          minlength=sizes.size)
     first = np.full(sizes.size, n)
     np.minimum.at(first, label[occupied], np.flatnonzero(occupied))
     kept = np.flatnonzero(sizes >= min_cells)
-    kept = kept[np.lexsort((first[kept], -sizes[kept]))]
+    kept = kept[np.lexsort((first[kept], -volumes[kept]))]
     renumber = np.zeros(sizes.size, dtype=np.int32)
     renumber[kept] = np.arange(1, kept.size + 1)
     return np.where(occupied, renumber[label], 0).astype(np.int32)
@@ -271,7 +283,7 @@ def _components_by_rds(valid, disk_links, dimension):
     return component
 
 
-def _number_patches(field, region, component):
+def _number_patches(field, region, component, disk_links):
     """Patch id of every disk from its component label (rule in module doc)."""
     n_cells = field.grid.size
     component = component.reshape(n_cells, field.max_solutions)
@@ -282,17 +294,50 @@ def _number_patches(field, region, component):
         cells = np.flatnonzero(region == r)
         labels = np.unique(component[cells][component[cells] >= 0])
         reference = cells[0]
+        if labels.size < field.count[reference]:
+            component = _cut_sheets(field, cells, component, disk_links)
+            labels = np.unique(component[cells][component[cells] >= 0])
         keys = []
         for label in labels:
             slots = np.flatnonzero(component[reference] == label)
-            if slots.size != 1:
-                raise RuntimeError(f"sheet {label} of region {r} covers its first cell "
-                                   f"{slots.size} times: region is not a trivial cover")
             keys.append((aspect[reference, slots[0]], slots[0]))
         order = sorted(range(len(labels)), key=lambda k: keys[k])
         for layer, k in enumerate(order, start=1):
             patch[component == labels[k]] = base * r + layer
     return patch
+
+
+def _cut_sheets(field, cells, component, disk_links):
+    """Relabel the disks of a region whose sheets do not come back to
+    themselves around a loop (rule in module doc): one label per disk of its
+    first cell, carried along a breadth-first tree of its cells."""
+    n = field.max_solutions
+    member = np.zeros(field.grid.size, dtype=bool)
+    member[cells] = True
+    lower = np.concatenate([lo for lo, _ in disk_links])
+    upper = np.concatenate([up for _, up in disk_links])
+    inside = member[lower // n]
+    lower, upper = lower[inside], upper[inside]
+    size = field.grid.size
+    keys = np.minimum(lower // n, upper // n) * size + np.maximum(lower // n, upper // n)
+    # The tree follows faces across which every solution continues (those
+    # that make the region), so each of its edges carries every label.
+    pair_keys, links_per_pair = np.unique(keys, return_counts=True)
+    full = pair_keys[links_per_pair == field.count[pair_keys // size]]
+    cell_graph = sparse.coo_matrix((np.ones(full.size, dtype=np.int8),
+                                    (full // size, full % size)), shape=(size, size)).tocsr()
+    order, parent = breadth_first_order(cell_graph, int(cells[0]), directed=False)
+    tree = np.sort(np.stack([parent[order[1:]], order[1:]], axis=1), axis=1).astype(np.int64)
+    on_tree = np.isin(keys, tree[:, 0] * size + tree[:, 1])
+    graph = sparse.coo_matrix((np.ones(int(on_tree.sum()), dtype=np.int8),
+                               (lower[on_tree], upper[on_tree])), shape=(size * n, size * n))
+    _, label = connected_components(graph, directed=False)
+    out = component.copy()
+    disks = (cells[:, None] * n + np.arange(n)).ravel()
+    valid = field.valid[cells].ravel()
+    # Fresh labels, past every label in use, so no other region's sheet is met.
+    out.ravel()[disks[valid]] = component.max() + 1 + label[disks[valid]]
+    return out
 
 
 def _absorb_unresolved(field, region, patch, links):
@@ -339,20 +384,23 @@ def _absorb_unresolved(field, region, patch, links):
 def _describe_patches(field, region, patch, links):
     n = field.grid.size
     # Boundary faces as keys pid * n + cell, so one np.unique sorts them by patch.
-    gate_keys, singular_keys = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
-    for lo, up, match in links:
-        for src, dst, forward in ((lo, up, match), (up, lo, _inverse(match))):
-            rows, slots = np.nonzero(field.valid[src] & (patch[src] > 0))
-            own = patch[src[rows], slots].astype(np.int64)
-            target = forward[rows, slots].astype(np.int64)
-            continues = target >= 0
-            other = np.where(continues, patch[dst[rows], np.maximum(target, 0)], 0)
-            gate = continues & (other > 0) & (other != own)
-            singular = ~continues | (other == 0)
-            gate_keys.append(own[gate] * n + src[rows][gate])
-            singular_keys.append(own[singular] * n + src[rows][singular])
-    gate_keys, singular_keys = np.unique(np.concatenate(gate_keys)), np.unique(
-        np.concatenate(singular_keys))
+    def boundary_keys(src, dst, forward):
+        rows, slots = np.nonzero(field.valid[src] & (patch[src] > 0))
+        own = patch[src[rows], slots].astype(np.int64)
+        target = forward[rows, slots].astype(np.int64)
+        continues = target >= 0
+        other = np.where(continues, patch[dst[rows], np.maximum(target, 0)], 0)
+        gate = continues & (other > 0) & (other != own)
+        singular = ~continues | (other == 0)
+        return own[gate] * n + src[rows][gate], own[singular] * n + src[rows][singular]
+
+    sides = [(lo, up, match) for lo, up, match in links] + [
+        (up, lo, _inverse(match)) for lo, up, match in links]
+    # numpy releases the GIL: the faces' sides are worked on in parallel.
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        keys = list(pool.map(lambda side: boundary_keys(*side), sides))
+    gate_keys = np.unique(np.concatenate([np.zeros(0, np.int64)] + [g for g, _ in keys]))
+    singular_keys = np.unique(np.concatenate([np.zeros(0, np.int64)] + [s for _, s in keys]))
 
     def of_patch(keys, pid):
         lo, hi = np.searchsorted(keys, [pid * n, (pid + 1) * n])
@@ -393,19 +441,29 @@ def _inverse(match):
 
 
 def _gates(field, patch, links):
-    faces, widths = {}, {}
-    steps = np.array(field.grid.steps)
-    for axis, (lo, up, match) in enumerate(links):
-        # A face across this axis spans the steps of all the others.
-        measure = float(np.prod(np.delete(steps, axis)))
+    first, second, cells_first, cells_second, measure = [], [], [], [], []
+    for (lo, up, match), measures in zip(links, field.grid.face_measures()):
         rows, slots = np.nonzero(match >= 0)
         a = patch[lo[rows], slots]
         b = patch[up[rows], match[rows, slots].astype(np.int64)]
         crossing = (a > 0) & (b > 0) & (a != b)
-        for pa, pb, ca, cb in zip(a[crossing], b[crossing], lo[rows][crossing],
-                                  up[rows][crossing]):
-            key = (int(min(pa, pb)), int(max(pa, pb)))
-            faces.setdefault(key, []).append((ca, cb) if pa < pb else (cb, ca))
-            widths[key] = widths.get(key, 0.0) + measure
-    return {key: Gate(patches=key, faces=np.array(sorted(v), dtype=np.int64), width=widths[key])
-            for key, v in sorted(faces.items())}
+        a, b = a[crossing], b[crossing]
+        ca, cb = lo[rows][crossing], up[rows][crossing]
+        swap = a > b
+        first.append(np.where(swap, b, a))
+        second.append(np.where(swap, a, b))
+        cells_first.append(np.where(swap, cb, ca))
+        cells_second.append(np.where(swap, ca, cb))
+        measure.append(measures[rows][crossing])
+    first, second, cells_first, cells_second, measure = (
+        np.concatenate(x) for x in (first, second, cells_first, cells_second, measure))
+    keys, gate = np.unique(np.stack([first, second], axis=1), axis=0, return_inverse=True)
+    gate = gate.ravel()
+    # Summed in the order the faces were met, as a running sum would.
+    widths = np.bincount(gate, weights=measure, minlength=len(keys))
+    order = np.lexsort((cells_second, cells_first, gate))
+    bounds = np.searchsorted(gate[order], np.arange(1, len(keys)))
+    faces = np.split(np.stack([cells_first, cells_second], axis=1)[order].astype(np.int64),
+                     bounds)
+    return {(int(a), int(b)): Gate(patches=(int(a), int(b)), faces=f, width=float(w))
+            for (a, b), f, w in zip(keys, faces, widths)}

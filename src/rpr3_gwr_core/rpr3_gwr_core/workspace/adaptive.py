@@ -1,0 +1,452 @@
+"""Adaptive grids: a coarse grid refined where the field is not uniform.
+
+A uniform grid fine enough for the paper's slice (0.125) has 64 million
+cells over the three legs.  Most of the configuration space is far from the
+singular locus, where a coarse cell tells as much as many fine ones; features
+(small regions, narrow gates) live next to it.  An adaptive grid keeps every
+point of a coarse *base* grid and adds the points of a lattice ``r`` times
+finer (``refinement``) inside the *refined blocks*: the boxes between
+``2**d`` adjacent base points that :func:`refine` picks.
+
+Refinement rule
+---------------
+A block stays coarse when all of these hold, else it is refined:
+
+1. its ``2**d`` corners have the same number of solutions;
+2. along each of its edges every solution continues into a solution of the
+   other end (:func:`~rpr3_gwr_core.workspace.continuity.match_solutions`);
+3. every solution at its corners has ``|margin| >= min_margin``.
+
+A fold of the singular locus changes the count across it (1.); where two
+folds cross an edge the count comes back but the continuation breaks (2.);
+a piece of the locus that passes between the corners without crossing an
+edge still lowers the margins of the solutions near it (3.).  What can still
+be missed is a feature that lies wholly inside a block with well-conditioned
+corners, such as a region smaller than a block: blocks whose corners have no
+solution at all are not refined.
+
+Cells and faces
+---------------
+The cells are the points of both lattices, numbered by ascending flat index
+on the fine lattice.  Two cells are face-adjacent along an axis when they are
+consecutive points on a line of the fine lattice parallel to it and at most
+one base step apart: fine neighbours inside refined blocks, base neighbours
+along the edges of coarse blocks, and hanging points of a refined block's
+face joined across a coarse block to the refined block opposite.  Each cell
+has at most one neighbour per face, so the rotary disk search applies as on
+a uniform grid.
+"""
+
+import itertools
+import math
+
+import numpy as np
+from scipy import sparse
+from scipy.sparse.csgraph import dijkstra
+
+from ..exceptions import InvalidInputError, OutOfGridError
+from .continuity import match_solutions
+from .field import compute_field
+from .grid import Axis, Grid
+
+__all__ = ["AdaptiveGrid", "refine", "grid_from_dict", "DEFAULT_REFINEMENT",
+           "DEFAULT_REFINE_MARGIN"]
+
+DEFAULT_REFINEMENT = 4
+DEFAULT_REFINE_MARGIN = 0.02
+
+
+class AdaptiveGrid:
+    """A base grid with some of its blocks refined (module doc).
+
+    Parameters
+    ----------
+    base : Grid
+        The coarse grid; every one of its points is a cell.
+    refinement : int
+        Fine points per base step along every axis, at least 2.
+    blocks : array_like of int
+        Flat indices of the refined blocks, row-major over the block array
+        of shape ``base.shape - 1``.
+
+    Attributes
+    ----------
+    axes : tuple of Axis
+        The fine lattice: the base's ranges with steps divided by ``refinement``.
+    """
+
+    def __init__(self, base, refinement, blocks):
+        if not isinstance(base, Grid):
+            raise InvalidInputError(f"an adaptive grid refines a Grid, got {type(base).__name__}")
+        if isinstance(refinement, bool) or int(refinement) != refinement or refinement < 2:
+            raise InvalidInputError(f"refinement is an integer >= 2, got {refinement!r}")
+        if min(base.shape) < 2:
+            raise InvalidInputError(f"an adaptive grid needs two base points per axis, "
+                                    f"got shape {base.shape}")
+        self.base = base
+        self.refinement = int(refinement)
+        self.block_shape = tuple(n - 1 for n in base.shape)
+        blocks = np.unique(np.asarray(blocks, dtype=np.int64).ravel())
+        if blocks.size and (blocks[0] < 0 or blocks[-1] >= math.prod(self.block_shape)):
+            raise InvalidInputError("refined block index outside the base grid")
+        self.blocks = blocks
+        r = self.refinement
+        self.axes = tuple(Axis(a.joint, a.low, a.low + a.step * (a.count - 1), a.step / r)
+                          for a in base.axes)
+        self.fine_shape = tuple((n - 1) * r + 1 for n in base.shape)
+        self._index = self._sample_points()
+        self._pairs = None
+        self._volumes = None
+
+    def _sample_points(self):
+        """Fine flat index of every cell, ascending."""
+        r = self.refinement
+        taken = np.zeros(self.fine_shape, dtype=bool)
+        taken[tuple(slice(None, None, r) for _ in self.fine_shape)] = True
+        corner = np.stack(np.unravel_index(self.blocks, self.block_shape), axis=1) * r
+        offsets = np.array(list(itertools.product(range(r + 1), repeat=self.ndim)))
+        flat = taken.reshape(-1)
+        # Blocks in chunks: a block brings (r + 1)**d points.
+        for start in range(0, len(corner), 4096):
+            inside = (corner[start:start + 4096, None, :] + offsets[None]).reshape(-1, self.ndim)
+            flat[np.ravel_multi_index(tuple(inside.T), self.fine_shape)] = True
+        return np.flatnonzero(flat)
+
+    # -- the Grid interface ---------------------------------------------------
+
+    @property
+    def fixed(self):
+        """``(joint, value)`` of every joint not on an axis."""
+        return self.base.fixed
+
+    @property
+    def ndim(self):
+        return self.base.ndim
+
+    @property
+    def n_joints(self):
+        return self.base.n_joints
+
+    @property
+    def axis_joints(self):
+        return self.base.axis_joints
+
+    @property
+    def size(self):
+        """Number of cells."""
+        return int(self._index.size)
+
+    @property
+    def steps(self):
+        """Fine step of each axis [joint unit]."""
+        return tuple(a.step for a in self.axes)
+
+    @property
+    def step(self):
+        """The smallest fine step [joint unit]."""
+        return min(self.steps)
+
+    def fixed_value(self, joint):
+        return self.base.fixed_value(joint)
+
+    def _multi(self, cells=None):
+        index = self._index if cells is None else self._index[cells]
+        return np.stack(np.unravel_index(index, self.fine_shape), axis=-1)
+
+    def coordinates(self):
+        """Axis values of every cell, shape (size, ndim)."""
+        low = np.array([a.low for a in self.axes])
+        return low + self._multi() * np.array(self.steps)
+
+    def joints(self):
+        """Joint vector of every cell, shape (size, n_joints)."""
+        out = np.empty((self.size, self.n_joints))
+        out[:, list(self.axis_joints)] = self.coordinates()
+        for joint, value in self.fixed:
+            out[:, joint] = value
+        return out
+
+    def joints_of(self, cell):
+        """Joint vector of one cell, shape (n_joints,)."""
+        index = np.unravel_index(int(self._index[int(cell)]), self.fine_shape)
+        out = np.empty(self.n_joints)
+        for axis, k in zip(self.axes, index):
+            out[axis.joint] = axis.low + axis.step * k
+        for joint, value in self.fixed:
+            out[joint] = value
+        return out
+
+    def _lookup(self, fine_flat):
+        """Cell of each fine flat index, -1 where it is no cell."""
+        k = np.minimum(np.searchsorted(self._index, fine_flat), self.size - 1)
+        return np.where(self._index[k] == fine_flat, k, -1)
+
+    def cells_of(self, points):
+        """The cell of many points, -1 outside the grid: the fine point nearest
+        each point if it is a cell, else the base point nearest it.
+
+        Parameters
+        ----------
+        points : ndarray, shape (n, ndim)
+            Axis coordinates.
+
+        Returns
+        -------
+        ndarray of int, shape (n,)
+        """
+        points = np.asarray(points, dtype=float).reshape(-1, self.ndim)
+        low = np.array([a.low for a in self.axes])
+        fine = np.rint((points - low) / np.array(self.steps)).astype(np.int64)
+        top = np.array(self.fine_shape) - 1
+        inside = np.all((fine >= 0) & (fine <= top), axis=1)
+        fine = np.clip(fine, 0, top)
+        cell = self._lookup(np.ravel_multi_index(tuple(fine.T), self.fine_shape))
+        coarse = np.rint((points - low) / np.array(self.base.steps)).astype(np.int64)
+        coarse = np.clip(coarse, 0, np.array(self.base.shape) - 1) * self.refinement
+        fallback = self._lookup(np.ravel_multi_index(tuple(coarse.T), self.fine_shape))
+        return np.where(inside, np.where(cell >= 0, cell, fallback), -1)
+
+    def cell_of(self, joints):
+        """The cell of a joint vector (:meth:`cells_of`).
+
+        Raises
+        ------
+        InvalidInputError
+            If an axis joint is NaN or infinite.
+        OutOfGridError
+            If the point lies farther than half a fine step outside the grid.
+        """
+        values = np.array([float(joints[a.joint]) for a in self.axes])
+        if not np.all(np.isfinite(values)):
+            raise InvalidInputError(f"cell_of needs finite joints, got {values.tolist()}")
+        for value, axis in zip(values, self.axes):
+            k = (value - axis.low) / axis.step
+            if not -0.5 <= k < axis.count - 0.5:
+                raise OutOfGridError(f"{tuple(values.tolist())} lies outside the grid "
+                                     f"{[(a.low, a.high) for a in self.axes]}")
+        return int(self.cells_of(values[None, :])[0])
+
+    def pairs(self):
+        """Face-adjacent cell pairs (module doc), one ``(lower, upper)`` pair of
+        cell arrays per axis, ``lower`` before ``upper`` along the axis."""
+        if self._pairs is None:
+            rank = np.full(math.prod(self.fine_shape), -1, dtype=np.int64)
+            rank[self._index] = np.arange(self.size)
+            multi = self._multi()
+            self._pairs = [self._axis_pairs(axis, rank, multi[:, axis])
+                           for axis in range(self.ndim)]
+        return [(lower, upper) for lower, upper, _ in self._pairs]
+
+    def _axis_pairs(self, axis, rank, position):
+        """Each cell and the next cell along ``axis`` within a base step;
+        ``rank`` maps fine flat indices to cells (-1 none), ``position`` is
+        each cell's fine index along the axis."""
+        stride = math.prod(self.fine_shape[axis + 1:])
+        upper = np.full(self.size, -1, dtype=np.int64)
+        gap = np.zeros(self.size, dtype=np.int64)
+        for step in range(self.refinement, 0, -1):
+            # Nearest last: the nearest next cell along the line wins.
+            ahead = position + step < self.fine_shape[axis]
+            found = np.full(self.size, -1, dtype=np.int64)
+            found[ahead] = rank[self._index[ahead] + step * stride]
+            upper = np.where(found >= 0, found, upper)
+            gap = np.where(found >= 0, step, gap)
+        lower = np.flatnonzero(upper >= 0)
+        return lower, upper[lower], gap[lower]
+
+    def _gaps(self):
+        self.pairs()
+        return [gap for _, _, gap in self._pairs]
+
+    def pair_lengths(self):
+        """Per axis, the length of each pair of :meth:`pairs` [joint unit]."""
+        return [gap * step for gap, step in zip(self._gaps(), self.steps)]
+
+    def face_measures(self):
+        """Per axis, the measure of the face each pair crosses: the other axes'
+        fine steps for fine pairs, their base steps for base ones
+        [joint unit**(d - 1)]."""
+        fine, coarse = np.array(self.steps), np.array(self.base.steps)
+        out = []
+        for axis, gap in enumerate(self._gaps()):
+            small = float(np.prod(np.delete(fine, axis)))
+            large = float(np.prod(np.delete(coarse, axis)))
+            out.append(np.where(gap < self.refinement, small, large))
+        return out
+
+    def volume_of(self, cells):
+        """Volume a set of cells stands for [joint unit**d] (:meth:`cell_volumes`)."""
+        if self._volumes is None:
+            self._volumes = self.cell_volumes()
+        return float(self._volumes[cells].sum())
+
+    def cell_volumes(self):
+        """Volume each cell stands for: every coarse block shares its volume
+        among its corners, every refined block among its fine points,
+        shape (size,) [joint unit**d]."""
+        r, d = self.refinement, self.ndim
+        refined = np.zeros(math.prod(self.block_shape), dtype=bool)
+        refined[self.blocks] = True
+        refined = refined.reshape(self.block_shape)
+        # Per fine point, how many of the 2**d boxes around it are fine boxes
+        # (of refined blocks) and how many are coarse blocks it is a corner of.
+        fine_box = refined
+        for axis in range(d):
+            fine_box = np.repeat(fine_box, r, axis=axis)
+        fine_share = _corner_sums(fine_box)
+        coarse_share = np.zeros(self.fine_shape)
+        coarse_share[tuple(slice(None, None, r) for _ in range(d))] = _corner_sums(~refined)
+        volume = (fine_share * (float(np.prod(self.steps)) / 2 ** d)
+                  + coarse_share * (float(np.prod(self.base.steps)) / 2 ** d))
+        return volume.ravel()[self._index]
+
+    def depth(self, cells):
+        """Distance of each given cell to the nearest cell not given, along
+        face-adjacent pairs, or to just beyond the grid's border if nearer
+        [fine steps].
+
+        Parameters
+        ----------
+        cells : ndarray of int, shape (k,)
+            Cells, ascending.
+
+        Returns
+        -------
+        ndarray, shape (k,)
+        """
+        cells = np.asarray(cells, dtype=np.int64)
+        multi = self._multi(cells)
+        border = np.min(np.minimum(multi, np.array(self.fine_shape) - 1 - multi), axis=1) + 1.0
+        member = np.zeros(self.size, dtype=bool)
+        member[cells] = True
+        rows, cols, weights = [], [], []
+        self.pairs()
+        for lower, upper, gap in self._pairs:
+            touch = member[lower] | member[upper]
+            rows.append(lower[touch])
+            cols.append(upper[touch])
+            weights.append(gap[touch].astype(float))
+        rows, cols, weights = map(np.concatenate, (rows, cols, weights))
+        outside = np.unique(np.concatenate([rows[~member[rows]], cols[~member[cols]]]))
+        if outside.size == 0:
+            return border
+        # Renumber the cells involved so the graph stays as small as the patch.
+        nodes = np.unique(np.concatenate([cells, outside]))
+        graph = sparse.csr_matrix((weights, (np.searchsorted(nodes, rows),
+                                             np.searchsorted(nodes, cols))),
+                                  shape=(nodes.size, nodes.size))
+        distance = dijkstra(graph, directed=False, indices=np.searchsorted(nodes, outside),
+                            min_only=True)
+        return np.minimum(distance[np.searchsorted(nodes, cells)], border)
+
+    def cells_near(self, joints, radius):
+        """Cells within ``radius`` fine steps of a joint vector, nearest first,
+        and the base points of the blocks around it (a point in a coarse block
+        may have no fine cell within ``radius``).
+
+        Returns
+        -------
+        list of int
+        """
+        r, d = self.refinement, self.ndim
+        low = np.array([a.low for a in self.axes])
+        steps = np.array(self.steps)
+        here = (np.array([joints[a.joint] for a in self.axes]) - low) / steps
+        reach = int(math.ceil(radius))
+        fine = np.rint(here).astype(np.int64) + np.array(
+            list(itertools.product(range(-reach, reach + 1), repeat=d)))
+        base = (np.floor(here / r).astype(np.int64) + np.array(
+            list(itertools.product((-1, 0, 1, 2), repeat=d)))) * r
+        index = np.unique(np.vstack([fine, base]), axis=0)
+        index = index[np.all((index >= 0) & (index < np.array(self.fine_shape)), axis=1)]
+        distance = np.linalg.norm(index - here, axis=1)
+        near = distance <= max(radius, r * math.sqrt(d))
+        cells = self._lookup(np.ravel_multi_index(tuple(index[near].T), self.fine_shape))
+        distance = distance[near][cells >= 0]
+        cells = cells[cells >= 0]
+        return cells[np.lexsort((cells, distance))].tolist()
+
+    def to_dict(self):
+        """Plain-data form, for JSON."""
+        return {"kind": "adaptive", "base": self.base.to_dict(),
+                "refinement": self.refinement, "blocks": self.blocks.tolist()}
+
+    @classmethod
+    def from_dict(cls, data):
+        """Inverse of :meth:`to_dict`."""
+        try:
+            return cls(Grid.from_dict(data["base"]), data["refinement"], data["blocks"])
+        except (KeyError, TypeError, ValueError) as exc:
+            raise InvalidInputError(f"malformed adaptive grid: {exc}") from exc
+
+
+def _corner_sums(boxes):
+    """For every corner point of an array of boxes, how many of the boxes
+    around it are set; shape ``boxes.shape + 1`` on every axis."""
+    out = np.zeros(tuple(n + 1 for n in boxes.shape))
+    for corner in itertools.product((0, 1), repeat=boxes.ndim):
+        out[tuple(slice(c, c + n) for c, n in zip(corner, boxes.shape))] += boxes
+    return out
+
+
+def grid_from_dict(data):
+    """A :class:`~rpr3_gwr_core.workspace.grid.Grid` or an :class:`AdaptiveGrid`
+    from its ``to_dict`` form."""
+    if isinstance(data, dict) and data.get("kind") == "adaptive":
+        return AdaptiveGrid.from_dict(data)
+    return Grid.from_dict(data)
+
+
+def refine(mechanism, base, refinement=DEFAULT_REFINEMENT, min_margin=DEFAULT_REFINE_MARGIN):
+    """The adaptive grid of a base grid under the refinement rule (module doc).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+    base : Grid
+        At least two points per axis.
+    refinement : int
+        Fine points per base step, at least 2.
+    min_margin : float
+        Rule 3's margin, non-negative.
+
+    Returns
+    -------
+    AdaptiveGrid
+
+    Examples
+    --------
+    A coarse slice at rho1 = 17 refined four times near the singular curve:
+
+    >>> from rpr3_gwr_core import PAPER_GEOMETRY, rho1_slice
+    >>> grid = refine(PAPER_GEOMETRY, rho1_slice(17.0, (10.0, 20.0), (10.0, 20.0), 1.0))
+    >>> grid.steps, grid.blocks.size < 100, grid.size > 121
+    ((0.25, 0.25), True, True)
+    """
+    if not isinstance(base, Grid):
+        raise InvalidInputError(f"refine takes a Grid, got {type(base).__name__}")
+    if not (math.isfinite(min_margin) and min_margin >= 0):
+        raise InvalidInputError(f"min_margin must be finite and >= 0, got {min_margin}")
+    AdaptiveGrid(base, refinement, ())  # validates before the field is computed
+    field = compute_field(mechanism, base)
+    shape = base.shape
+    blocks = tuple(n - 1 for n in shape)
+    count = field.count.reshape(shape).astype(np.int16)
+    weakest = np.min(np.where(field.valid, np.abs(field.margin), np.inf), axis=1).reshape(shape)
+    uniform = np.ones(blocks, dtype=bool)
+    corners = list(itertools.product((0, 1), repeat=base.ndim))
+    for corner in corners:
+        here = tuple(slice(c, c + n) for c, n in zip(corner, blocks))
+        uniform &= (count[here] == count[tuple(slice(0, n) for n in blocks)]) & (
+            weakest[here] >= min_margin)
+    for axis, (lower, upper) in enumerate(base.pairs()):
+        match = match_solutions(field, lower, upper)
+        continues = ((field.count[lower] == field.count[upper])
+                     & np.all((match >= 0) == field.valid[lower], axis=1))
+        edge_shape = tuple(n - 1 if k == axis else n for k, n in enumerate(shape))
+        continues = continues.reshape(edge_shape)
+        for corner in corners:
+            if corner[axis]:
+                continue
+            uniform &= continues[tuple(slice(c, c + n) for c, n in zip(corner, blocks))]
+    return AdaptiveGrid(base, refinement, np.flatnonzero(~uniform.ravel()))
