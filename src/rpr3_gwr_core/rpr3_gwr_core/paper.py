@@ -9,9 +9,10 @@ refined :data:`FULL_REFINEMENT` times near the singular locus
 (:func:`~rpr3_gwr_core.workspace.adaptive.refine`): all three legs in
 [0, 50] except rho1 >= 1.  At rho1 = 0 leg 1 vanishes, B1 sits on A1 and
 the direct kinematics degenerates (no solution is found); below 1 the slices
-hold only a sliver of two-solution cells.  Base step 1, fine step 0.25: at
-rho1 = 17 the refined slice has the 7 regions, 24 patches and 36 gates of
-the paper's 0.125 grid, with region areas within 0.1 of it.
+hold only a sliver of two-solution cells.  Base step 1, fine step 0.25: a
+slice at rho1 = 17 refined so has the 7 regions, 24 patches and 36 gates of
+the paper's 0.125 grid, region areas within 0.6 of it (refined 8 times:
+within 0.1, and the same gates), from a sixth of its cells.
 """
 
 import math

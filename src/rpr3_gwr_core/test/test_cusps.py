@@ -52,3 +52,27 @@ def test_the_cli_prints_the_cusps(tmp_path, capsys):
     np.testing.assert_allclose([[c["rho2"], c["rho3"]] for c in printed], CUSPS_AT_17,
                                atol=1e-4)
     assert all(-math.pi < c["alpha"] <= math.pi and c["regions"] for c in printed)
+
+
+def test_cusp_curves_run_through_the_cusps_of_every_slice(capsys):
+    assert main(["cusps", "--trace", "15", "19", "1"]) == 0
+    curves = json.loads(capsys.readouterr().out)["curves"]
+    assert len(curves) == 6 and all(len(curve) == 5 for curve in curves)
+    at_17 = sorted((c["rho2"], c["rho3"]) for curve in curves for c in curve if c["rho1"] == 17)
+    np.testing.assert_allclose(at_17, CUSPS_AT_17, atol=1e-4)
+    for curve in curves:
+        legs = np.array([[c["rho1"], c["rho2"], c["rho3"]] for c in curve])
+        # Each curve moves a little from one slice to the next: a curve, not a jump.
+        assert np.all(np.linalg.norm(np.diff(legs, axis=0), axis=1) < 2.0)
+        for c in curve:
+            pose = np.array([c["x"], c["y"], c["alpha"]])
+            assert abs(singularity_margin(pose)) < 1e-6
+
+
+def test_cusp_curves_need_slices_along_one_joint():
+    from rpr3_gwr_core.paper import rho1_slice
+    from rpr3_gwr_core.workspace.cusps import cusp_curves
+
+    coarse = [build_roadmap(PAPER_GEOMETRY, rho1_slice(v, step=1.0)) for v in (18.0, 17.0)]
+    with pytest.raises(InvalidInputError):
+        cusp_curves(coarse)

@@ -12,6 +12,7 @@ import hashlib
 import json
 import os
 import tempfile
+import time
 import zipfile
 
 import numpy as np
@@ -71,9 +72,13 @@ def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=No
             return _load(path), True
         except (InvalidInputError, OSError, ValueError, KeyError, zipfile.BadZipFile):
             pass  # a damaged entry is rebuilt below
+    begin = time.perf_counter()
     if refinement is not None:
         grid = refine(mechanism, grid, refinement)
+    refined = time.perf_counter() - begin
     roadmap = build_roadmap(mechanism, grid, progress=progress)
+    if refinement is not None:
+        roadmap.timings["refine"] = refined
     os.makedirs(directory, exist_ok=True)
     handle, tmp = tempfile.mkstemp(dir=directory, suffix=".npz")
     with os.fdopen(handle, "wb") as stream:

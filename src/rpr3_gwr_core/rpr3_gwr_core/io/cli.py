@@ -6,17 +6,24 @@ Subcommands::
     rpr3-gwr roadmap [--rho1 17] [--rho2 MIN MAX] [--rho3 MIN MAX] [--step 0.125]
                      [--method components|rds] [-o FILE] [--gexf FILE]
                      [--field-figure FILE] [--roadmap-figure FILE]
+    rpr3-gwr roadmap --full [--cache-dir DIR] [--gexf FILE] [--roadmap-figure FILE]
+                     [--slice-figure FILE] [--slice-rho1 17]
     rpr3-gwr plan --rho1 17 --start RHO2 RHO3 ALPHA_DEG --goal RHO2 RHO3 ALPHA_DEG
                   [--smooth] [--weighted] [--feasibility-only]
                   [--max-velocity V --max-acceleration A] [-o FILE]
+    rpr3-gwr plan --full --start RHO1 RHO2 RHO3 ALPHA_DEG --goal RHO1 RHO2 RHO3 ALPHA_DEG
+                  [the options above]
     rpr3-gwr plot PLAN.json [-o FIGURE]
     rpr3-gwr cusps [--rho1 17] [--cache-dir DIR]
+    rpr3-gwr cusps --trace RHO1_MIN RHO1_MAX RHO1_STEP [--step 0.25]
 
 Results go to stdout as JSON; bad arguments exit with code 2 and one line on
 stderr; a plan that cannot be made prints an ``error`` object with a code and
 a message and exits with 1; progress is shown on stderr when it is a terminal.
 ``plan`` and ``plot`` keep built roadmaps in the cache of
-:mod:`~rpr3_gwr_core.cache` (``--cache-dir``).
+:mod:`~rpr3_gwr_core.cache` (``--cache-dir``).  ``--full`` takes the full
+3-DOF roadmap, all three legs free (:data:`~rpr3_gwr_core.paper.FULL_BASE_GRID`
+refined :data:`~rpr3_gwr_core.paper.FULL_REFINEMENT` times), from the cache.
 """
 
 import argparse
@@ -31,10 +38,10 @@ import numpy as np
 from ..exceptions import GWRError, InvalidInputError
 from ..mechanisms import mechanism_from_dict
 from ..mechanisms.rpr3 import aspect, direct_kinematics
-from ..paper import PAPER_GEOMETRY, rho1_slice
+from ..paper import FULL_BASE_GRID, FULL_REFINEMENT, PAPER_GEOMETRY, rho1_slice
 from ..planning import PlanOptions, Planner
 from ..workspace import Grid, build_roadmap
-from ..workspace.cusps import find_cusps
+from ..workspace.cusps import cusp_curves, find_cusps
 from .cache import cached_roadmap, default_cache_dir
 
 __all__ = ["main"]
@@ -73,12 +80,20 @@ def _parser():
     roadmap.add_argument("--field-figure",
                          help="write the n-solution field figure here (PNG, PDF, SVG)")
     roadmap.add_argument("--roadmap-figure", help="write the roadmap graph figure here")
+    roadmap.add_argument("--full", action="store_true",
+                         help="the full 3-DOF roadmap, all legs free (cached)")
+    roadmap.add_argument("--slice-figure", help="with --full: draw the regions of a slice here")
+    roadmap.add_argument("--slice-rho1", type=_finite, default=17.0,
+                         help="with --full: rho1 of the slice figure")
+    roadmap.add_argument("--cache-dir", default=default_cache_dir())
     plan = sub.add_parser("plan", help="plan a singularity-free path between two configurations")
     plan.add_argument("--rho1", type=_finite, default=17.0)
-    plan.add_argument("--start", type=_finite, nargs=3, required=True,
-                      metavar=("RHO2", "RHO3", "ALPHA_DEG"))
-    plan.add_argument("--goal", type=_finite, nargs=3, required=True,
-                      metavar=("RHO2", "RHO3", "ALPHA_DEG"))
+    plan.add_argument("--full", action="store_true",
+                      help="plan on the full 3-DOF roadmap: --start and --goal give rho1 first")
+    plan.add_argument("--start", type=_finite, nargs="+", required=True,
+                      metavar="[RHO1] RHO2 RHO3 ALPHA_DEG")
+    plan.add_argument("--goal", type=_finite, nargs="+", required=True,
+                      metavar="[RHO1] RHO2 RHO3 ALPHA_DEG")
     plan.add_argument("--smooth", action="store_true", help="shortcut and round the path")
     plan.add_argument("--weighted", action="store_true", help="rank global paths by weighted cost")
     plan.add_argument("--feasibility-only", action="store_true",
@@ -94,6 +109,10 @@ def _parser():
     cusps = sub.add_parser("cusps", help="the cusp points of the singular curve at rho1")
     cusps.add_argument("--rho1", type=_finite, default=17.0)
     cusps.add_argument("--cache-dir", default=default_cache_dir())
+    cusps.add_argument("--trace", type=_finite, nargs=3, metavar=("MIN", "MAX", "STEP"),
+                       help="trace the cusp curves across rho1 (slices at this many values)")
+    cusps.add_argument("--step", type=_finite, default=0.25,
+                       help="with --trace: grid step of each slice")
     plot = sub.add_parser("plot", help="draw a plan written by 'rpr3-gwr plan'")
     plot.add_argument("plan_file", metavar="PLAN.json")
     plot.add_argument("-o", "--output", help="figure file (default: PLAN.png beside the plan)")
@@ -118,6 +137,16 @@ class _Progress:
 
 
 def _cusps(args):
+    if args.trace:
+        low, high, step = args.trace
+        if not (0 < low <= high and step > 0) or (high - low) / step > 1000:
+            raise InvalidInputError("--trace takes 0 < MIN <= MAX and a STEP giving at most "
+                                    "1000 slices")
+        values = low + step * np.arange(int(math.floor((high - low) / step + 1e-9)) + 1)
+        slices = [build_roadmap(PAPER_GEOMETRY, rho1_slice(float(v), step=args.step))
+                  for v in values]
+        return {"curves": [[c.to_dict(PAPER_GEOMETRY) for c in curve]
+                           for curve in cusp_curves(slices)]}
     roadmap, _ = cached_roadmap(PAPER_GEOMETRY, rho1_slice(args.rho1), args.cache_dir,
                                 _Progress(sys.stderr))
     return [c.to_dict(PAPER_GEOMETRY) for c in find_cusps(roadmap)]
@@ -130,15 +159,34 @@ def _dk(args):
             for p, s in zip(poses, signs)]
 
 
+def _full_roadmap(cache_dir):
+    return cached_roadmap(PAPER_GEOMETRY, FULL_BASE_GRID, cache_dir, _Progress(sys.stderr),
+                          refinement=FULL_REFINEMENT)
+
+
 def _roadmap(args):
     from .export import roadmap_summary, roadmap_to_gexf, roadmap_to_json
 
-    grid = rho1_slice(args.rho1, tuple(args.rho2), tuple(args.rho3), args.step)
     start = time.perf_counter()
-    roadmap = build_roadmap(PAPER_GEOMETRY, grid, method=args.method,
-                            progress=_Progress(sys.stderr))
+    if args.full:
+        if args.field_figure:
+            raise InvalidInputError("--field-figure draws 2-D grids: with --full use "
+                                    "--slice-figure")
+        roadmap, hit = _full_roadmap(args.cache_dir)
+    else:
+        if args.slice_figure:
+            raise InvalidInputError("--slice-figure needs --full")
+        grid = rho1_slice(args.rho1, tuple(args.rho2), tuple(args.rho3), args.step)
+        roadmap, hit = build_roadmap(PAPER_GEOMETRY, grid, method=args.method,
+                                     progress=_Progress(sys.stderr)), False
     summary = roadmap_summary(roadmap)
     summary["timings"] = dict(roadmap.timings, total=time.perf_counter() - start)
+    summary["from_cache"] = hit
+    if args.slice_figure:
+        from .figures import slice_figure
+
+        cusps = find_cusps(build_roadmap(PAPER_GEOMETRY, rho1_slice(args.slice_rho1, step=0.25)))
+        slice_figure(roadmap, {0: args.slice_rho1}, cusps).savefig(args.slice_figure, dpi=120)
     if args.output:
         with open(args.output, "w", encoding="utf-8") as out:
             out.write(roadmap_to_json(roadmap))
@@ -156,16 +204,28 @@ def _roadmap(args):
 
 
 def _plan(args):
-    grid = rho1_slice(args.rho1)
-    roadmap, _ = cached_roadmap(PAPER_GEOMETRY, grid, args.cache_dir, _Progress(sys.stderr))
+    given = 4 if args.full else 3
+    for name in ("start", "goal"):
+        if len(getattr(args, name)) != given:
+            raise InvalidInputError(
+                f"--{name} takes {'RHO1 ' if args.full else ''}RHO2 RHO3 ALPHA_DEG"
+                f"{'' if args.full else ' (rho1 is --rho1; --full plans with rho1 free)'}")
+    if args.full:
+        roadmap, _ = _full_roadmap(args.cache_dir)
+        start, goal = tuple(args.start), tuple(args.goal)
+        roadmap_doc = {"mechanism": PAPER_GEOMETRY.to_dict(), "full": True}
+    else:
+        grid = rho1_slice(args.rho1)
+        roadmap, _ = cached_roadmap(PAPER_GEOMETRY, grid, args.cache_dir, _Progress(sys.stderr))
+        start, goal = (args.rho1, *args.start), (args.rho1, *args.goal)
+        roadmap_doc = {"mechanism": PAPER_GEOMETRY.to_dict(), "grid": grid.to_dict()}
     options = PlanOptions(smooth=args.smooth, weighted=args.weighted,
                           feasibility_only=args.feasibility_only,
                           max_velocity=args.max_velocity, max_acceleration=args.max_acceleration,
                           mode_tol=math.radians(args.alpha_tol_deg))
-    start = (args.rho1, args.start[0], args.start[1], math.radians(args.start[2]))
-    goal = (args.rho1, args.goal[0], args.goal[1], math.radians(args.goal[2]))
-    header = {"roadmap": {"mechanism": PAPER_GEOMETRY.to_dict(), "grid": grid.to_dict()},
-              "request": {"start": list(start), "goal": list(goal)}}
+    start = (*start[:3], math.radians(start[3]))
+    goal = (*goal[:3], math.radians(goal[3]))
+    header = {"roadmap": roadmap_doc, "request": {"start": list(start), "goal": list(goal)}}
     begin = time.perf_counter()
     try:
         result = dict(header, **Planner(roadmap).plan(start, goal, options).to_dict())
@@ -187,6 +247,9 @@ def _plot(args):
     with open(args.plan_file, encoding="utf-8") as stream:
         try:
             plan = json.load(stream)
+            if plan["roadmap"].get("full"):
+                raise InvalidInputError(f"{args.plan_file} is a --full plan: 'plot' draws plans "
+                                        "at fixed rho1 (the waypoints are in the JSON)")
             mechanism = mechanism_from_dict(plan["roadmap"]["mechanism"])
             grid = Grid.from_dict(plan["roadmap"]["grid"])
         except (json.JSONDecodeError, KeyError, TypeError) as exc:

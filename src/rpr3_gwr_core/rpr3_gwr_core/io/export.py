@@ -37,8 +37,9 @@ the mechanism's length unit, angles in radians::
     }
 
 Cells are flat row-major indices over the grid's axes (on an adaptive grid:
-its cells in the order of :class:`~rpr3_gwr_core.workspace.adaptive.AdaptiveGrid`).  Reading a document
-back derives patches and gates from the field's arrays
+its cells in the order of
+:class:`~rpr3_gwr_core.workspace.adaptive.AdaptiveGrid`).  Reading a
+document back derives patches and gates from the field's arrays
 (:meth:`~rpr3_gwr_core.workspace.segmentation.Segmentation.from_arrays`),
 as the ROS nodes' message decoder does.
 """

@@ -7,13 +7,13 @@ pyplot, so they work headless and write nothing: the caller saves them.
 import networkx as nx
 import numpy as np
 from matplotlib.figure import Figure
-from scipy.ndimage import distance_transform_cdt
+from scipy.ndimage import distance_transform_cdt, label as label_pieces
 
 from ..exceptions import InvalidInputError
 from ..workspace import aspect_groups
 from ..workspace.cusps import known_cusps
 
-__all__ = ["field_figure", "roadmap_figure", "plan_figure"]
+__all__ = ["field_figure", "slice_figure", "roadmap_figure", "plan_figure"]
 
 
 def field_figure(roadmap):
@@ -60,6 +60,74 @@ def field_figure(roadmap):
     ax.set_xlabel(labels[0])
     ax.set_ylabel(labels[1])
     ax.set_title(f"n-solution field and regions{fixed}")
+    return fig
+
+
+def slice_figure(roadmap, fixed, cusps=()):
+    """Number of solutions and regions of a roadmap over more than two
+    joints, on the plane where the others take given values.
+
+    Each pixel (one per fine step) shows the grid cell ``cells_of`` gives for
+    it; region ids are those of the whole roadmap, written at the most
+    interior pixel of each of their pieces in the plane.
+
+    Parameters
+    ----------
+    roadmap : Roadmap
+    fixed : mapping of int to float
+        Axis joint to its value, for all axes but two.
+    cusps : sequence of Cusp
+        Cusp points to mark (of that plane).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    grid, names = roadmap.grid, roadmap.mechanism.joint_names
+    free = [k for k, a in enumerate(grid.axes) if a.joint not in fixed]
+    if len(free) != 2 or len(fixed) != grid.ndim - 2:
+        raise InvalidInputError(f"a slice fixes all axes but two, got {dict(fixed)} for the "
+                                f"axes {[names[a.joint] for a in grid.axes]}")
+    axes = [grid.axes[k] for k in free]
+    u, v = axes[0].values, axes[1].values
+    points = np.empty((u.size * v.size, grid.ndim))
+    for k, axis in enumerate(grid.axes):
+        points[:, k] = fixed.get(axis.joint, 0.0)
+    mesh = np.meshgrid(u, v, indexing="ij")
+    points[:, free[0]], points[:, free[1]] = mesh[0].ravel(), mesh[1].ravel()
+    cells = grid.cells_of(points)
+    if np.any(cells < 0):
+        raise InvalidInputError(f"the slice {dict(fixed)} leaves the grid")
+    seg = roadmap.segmentation
+    count = seg.field.count[cells].reshape(u.size, v.size).astype(float)
+    region = seg.region[cells].reshape(u.size, v.size)
+    count[region == 0] = np.nan
+    fig = Figure(figsize=(7, 6))
+    ax = fig.add_subplot()
+    image = ax.imshow(count.T, origin="lower", extent=(u[0], u[-1], v[0], v[-1]),
+                      cmap="viridis", vmin=0, vmax=seg.field.max_solutions,
+                      interpolation="nearest")
+    edges = np.zeros(region.shape, dtype=bool)
+    edges[:-1, :] |= region[:-1, :] != region[1:, :]
+    edges[:, :-1] |= region[:, :-1] != region[:, 1:]
+    ax.contour(u, v, edges.T.astype(float), levels=[0.5], colors="k", linewidths=0.6)
+    for r in range(1, seg.n_regions + 1):
+        pieces, n = label_pieces(region == r)
+        for piece in range(1, n + 1):
+            if np.count_nonzero(pieces == piece) >= 16:
+                i, j = _interior_point(pieces == piece)
+                ax.text(u[i], v[j], str(r), ha="center", va="center", fontsize=9,
+                        bbox={"boxstyle": "circle", "fc": "white", "ec": "k"})
+    fig.colorbar(image, ax=ax, label="number of solutions")
+    at = dict(fixed)
+    cusps = np.array([c.joints[[axes[0].joint, axes[1].joint]] for c in cusps])
+    if cusps.size:
+        ax.plot(cusps[:, 0], cusps[:, 1], "r^", ms=8, label="cusp")
+        ax.legend(loc="upper left")
+    ax.set_xlabel(names[axes[0].joint])
+    ax.set_ylabel(names[axes[1].joint])
+    plane = ", ".join(f"{names[j]} = {value:g}" for j, value in sorted(at.items()))
+    ax.set_title(f"slice {plane} of the {grid.ndim}-D roadmap: solutions and regions")
     return fig
 
 

@@ -7,6 +7,10 @@ together (two fold pairs meeting), and the closer they are, the nearer the
 cusp.  The seeds are thinned so that one cluster of
 cells gives one seed, and each is refined by the mechanism's Newton on its
 pose equations (:meth:`~rpr3_gwr_core.mechanisms.Mechanism.refine_cusp`).
+
+Across a family of slices (rho1 varying, for the 3-RPR) the cusps trace
+curves: :func:`cusp_curves` follows each from slice to slice by Newton from
+its last pose, in substeps, and matches it to the next slice's own cusps.
 """
 
 from dataclasses import dataclass
@@ -15,7 +19,7 @@ import numpy as np
 
 from ..exceptions import InvalidInputError, OutOfGridError
 
-__all__ = ["Cusp", "find_cusps", "known_cusps"]
+__all__ = ["Cusp", "find_cusps", "known_cusps", "cusp_curves"]
 
 # One seed per ball of this many grid steps, the closest triples first.
 _SEED_SPACING = 8.0
@@ -96,6 +100,88 @@ def known_cusps(roadmap):
         return find_cusps(roadmap)
     except (InvalidInputError, NotImplementedError):
         return []
+
+
+def cusp_curves(roadmaps, substeps=4):
+    """Cusp curves across slices that differ in the value of one fixed joint.
+
+    Parameters
+    ----------
+    roadmaps : sequence of Roadmap
+        2-D roadmaps of one mechanism on grids with the same axes and fixed
+        joints, one fixed joint's value increasing from one to the next.
+    substeps : int
+        Newton continuations between two slices, at least 1.
+
+    Returns
+    -------
+    list of list of Cusp
+        Each curve is the cusps it passes through, one per slice, from the
+        first slice it appears in; a cusp no curve continues into starts a
+        new one.  Curves are ordered by their first slice, then joints.
+
+    Raises
+    ------
+    InvalidInputError
+        If the slices do not differ in exactly one fixed joint.
+    """
+    if not roadmaps:
+        return []
+    grids = [r.grid for r in roadmaps]
+    joints = {j for g in grids for j, _ in g.fixed}
+    moving = [j for j in sorted(joints)
+              if len({dict(g.fixed).get(j) for g in grids}) == len(grids)]
+    if (len(moving) != 1 or any(g.axes != grids[0].axes for g in grids)
+            or any(g.fixed_value(moving[0]) <= h.fixed_value(moving[0])
+                   for h, g in zip(grids, grids[1:]))):
+        raise InvalidInputError("cusp curves need slices with the same axes whose one moving "
+                                "fixed joint increases")
+    if int(substeps) < 1:
+        raise InvalidInputError("substeps must be at least 1")
+    joint = moving[0]
+    mechanism = roadmaps[0].mechanism
+    curves, open_curves = [], []
+    for k, roadmap in enumerate(roadmaps):
+        fresh = find_cusps(roadmap)
+        taken = set()
+        still_open = []
+        for curve in open_curves:
+            pose = _continue(mechanism, curve[-1], grids[k - 1], grids[k], joint, int(substeps))
+            match = None if pose is None else _nearest(fresh, pose, mechanism, taken)
+            if match is not None:
+                taken.add(match)
+                curve.append(fresh[match])
+                still_open.append(curve)
+        for i, cusp in enumerate(fresh):
+            if i not in taken:
+                curve = [cusp]
+                curves.append(curve)
+                still_open.append(curve)
+        open_curves = still_open
+    return curves
+
+
+def _continue(mechanism, cusp, grid_from, grid_to, joint, substeps):
+    """A cusp's pose carried by Newton from one slice's value to the next's."""
+    fixed = dict(grid_from.fixed)
+    start, end = grid_from.fixed_value(joint), grid_to.fixed_value(joint)
+    pose = cusp.pose
+    for s in range(1, substeps + 1):
+        fixed[joint] = start + (end - start) * s / substeps
+        refined = mechanism.refine_cusp(pose, fixed)
+        if refined is None:
+            return None
+        pose = refined[0]
+    return pose
+
+
+def _nearest(cusps, pose, mechanism, taken):
+    """Index of the cusp whose pose is ``pose`` (Newton converged onto it)."""
+    for i, cusp in enumerate(cusps):
+        if i not in taken and mechanism.pose_distance(cusp.pose, pose) < (
+                1e-6 * mechanism.scale):
+            return i
+    return None
 
 
 def _seeds(field):

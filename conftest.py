@@ -1,0 +1,23 @@
+"""Fixtures of both test folders: one roadmap cache per test session, so the
+full 3-DOF roadmap is built once whether a core test, the CLI or a node asks
+for it first, and nothing outside the session's temporary folder is read."""
+
+import os
+
+import pytest
+
+
+@pytest.fixture(scope="session", autouse=True)
+def roadmap_cache(tmp_path_factory):
+    """The session's roadmap cache folder, also ``$RPR3_GWR_CACHE`` for the
+    processes the tests start."""
+    folder = str(tmp_path_factory.mktemp("roadmap-cache"))
+    previous = os.environ.get("RPR3_GWR_CACHE")
+    os.environ["RPR3_GWR_CACHE"] = folder
+    try:
+        yield folder
+    finally:
+        if previous is None:
+            os.environ.pop("RPR3_GWR_CACHE", None)
+        else:
+            os.environ["RPR3_GWR_CACHE"] = previous
