@@ -21,3 +21,15 @@ def roadmap_cache(tmp_path_factory):
             os.environ.pop("RPR3_GWR_CACHE", None)
         else:
             os.environ["RPR3_GWR_CACHE"] = previous
+
+
+@pytest.fixture(scope="session")
+def full_roadmap(roadmap_cache):
+    """The full 3-DOF roadmap of the default box, from the session's cache."""
+    from rpr3_gwr_core import PAPER_GEOMETRY
+    from rpr3_gwr_core.io.cache import cached_roadmap
+    from rpr3_gwr_core.paper import FULL_BASE_GRID, FULL_REFINEMENT
+
+    roadmap, _ = cached_roadmap(PAPER_GEOMETRY, FULL_BASE_GRID, roadmap_cache,
+                                refinement=FULL_REFINEMENT)
+    return roadmap

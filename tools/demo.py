@@ -3,8 +3,10 @@
 Starts roadmap_builder, planner, rpr3_driver and trajectory_recorder as
 separate processes with the project's localhost Fast DDS profile and a ROS
 domain of its own, plans the paper's two examples through the planner's
-service, executes them on the driver, records a bag, writes the figures to
-out/, prints a short report and shuts everything down with SIGINT.
+service, executes them on the driver, then switches the builder to the full
+3-DOF roadmap and plans and executes a motion that needs rho1 to move,
+records a bag, writes the figures to out/, prints a short report and shuts
+everything down with SIGINT.
 """
 
 import json
@@ -36,6 +38,8 @@ from rosbags.rosbag2 import Reader  # noqa: E402
 from rpr3_gwr_core.io.figures import field_figure, plan_figure, roadmap_figure  # noqa: E402
 from rpr3_gwr_msgs.action import ExecuteTrajectory  # noqa: E402
 from rpr3_gwr_msgs.msg import Configuration, NSolutionField, WorkspaceRoadmap  # noqa: E402
+from rcl_interfaces.srv import SetParameters  # noqa: E402
+from rclpy.parameter import Parameter  # noqa: E402
 from rpr3_gwr_msgs.srv import PlanPath, ResetDriver  # noqa: E402
 from rpr3_gwr_nodes.conversions import roadmap_from_msgs  # noqa: E402
 from rpr3_gwr_nodes.profiles import LATCHED_QOS  # noqa: E402
@@ -44,6 +48,10 @@ EXAMPLES = {
     "paper_5_2_two_configurations": ((17.0, 12.0, 18.0, 122.82), (17.0, 10.0, 25.0, -24.24)),
     "paper_5_3_assembly_mode_change": ((17.0, 20.0, 25.0, 29.47), (17.0, 20.0, 25.0, 96.13)),
 }
+# Issue 10's pocket: the same legs, two modes of the det Jx < 0 side that no
+# motion at fixed rho1 joins; the full 3-DOF roadmap joins them by moving rho1.
+FULL_EXAMPLE = ((27.5, 31.67154934, 2.14117832, -101.0),
+                (27.5, 31.67154934, 2.14117832, 158.048263))
 TIME_SCALE = 10.0
 TIMEOUT = 120.0
 
@@ -65,6 +73,42 @@ def _start(executable, *parameters, log):
     for name, value in parameters:
         command += ["-p", f"{name}:={value}"]
     return subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT)
+
+
+def _run_example(name, q1, q2, plan, reset, execute):
+    """Plan from q1 to q2, execute on the driver, print a line and write the
+    plan's JSON; returns that data with ``failed`` set if the driver failed."""
+    request = PlanPath.Request(start=_configuration(q1), goal=_configuration(q2),
+                               smooth=True, max_velocity=2.0, max_acceleration=4.0)
+    begin = time.perf_counter()
+    response = _wait(plan.call_async(request))
+    took = time.perf_counter() - begin
+    if not response.success:
+        raise RuntimeError(f"{name}: planning failed: {response.error_msg}")
+    done = _wait(reset.call_async(ResetDriver.Request(configuration=_configuration(q1))))
+    if not done.success:
+        raise RuntimeError(f"{name}: driver reset failed: {done.error_msg}")
+    handle = _wait(execute.send_goal_async(ExecuteTrajectory.Goal(
+        trajectory=response.trajectory)))
+    result = _wait(handle.get_result_async()).result
+    points = response.trajectory.points
+    duration = points[-1].time_from_start.sec + points[-1].time_from_start.nanosec * 1e-9
+    legs = [list(p.positions) for p in points]
+    length = sum(math.dist(a, b) for a, b in zip(legs, legs[1:]))
+    paths = ", ".join(" -> ".join(map(str, g.patch_ids)) for g in response.global_paths)
+    print(f"{name}: global paths [{paths}]; trajectory {len(points)} points, "
+          f"{length:.1f} length units of legs, {duration:.1f} s; planned in "
+          f"{1e3 * took:.0f} ms; min singularity margin planned "
+          f"{response.min_singularity_margin:.4f}, executed "
+          f"{result.min_singularity_margin:.4f}; "
+          f"driver: {'done' if result.error_code == 0 else result.error_msg}, platform at "
+          f"alpha = {math.degrees(result.final_pose.alpha):.2f} deg")
+    data = {"waypoints": [{"joints": r, "pose": [p.x, p.y, p.alpha]}
+                          for r, p in zip(legs, response.poses)],
+            "global_paths": [list(g.patch_ids) for g in response.global_paths],
+            "path_index": response.path_index}
+    (OUT / f"{name}.json").write_text(json.dumps(data))
+    return dict(data, failed=int(result.error_code != 0))
 
 
 def main():
@@ -125,39 +169,34 @@ def main():
                 raise TimeoutError("the planner got no roadmap")
             time.sleep(0.1)
         for name, (q1, q2) in EXAMPLES.items():
-            request = PlanPath.Request(start=_configuration(q1), goal=_configuration(q2),
-                                       smooth=True, max_velocity=2.0, max_acceleration=4.0)
-            begin = time.perf_counter()
-            response = _wait(plan.call_async(request))
-            took = time.perf_counter() - begin
-            if not response.success:
-                raise RuntimeError(f"{name}: planning failed: {response.error_msg}")
-            done = _wait(reset.call_async(ResetDriver.Request(configuration=_configuration(q1))))
-            if not done.success:
-                raise RuntimeError(f"{name}: driver reset failed: {done.error_msg}")
-            handle = _wait(execute.send_goal_async(ExecuteTrajectory.Goal(
-                trajectory=response.trajectory)))
-            result = _wait(handle.get_result_async()).result
-            points = response.trajectory.points
-            duration = points[-1].time_from_start.sec + points[-1].time_from_start.nanosec * 1e-9
-            legs = [list(p.positions) for p in points]
-            length = sum(math.dist(a, b) for a, b in zip(legs, legs[1:]))
-            paths = ", ".join(" -> ".join(map(str, g.patch_ids)) for g in response.global_paths)
-            print(f"{name}: global paths [{paths}]; trajectory {len(points)} points, "
-                  f"{length:.1f} length units of legs, {duration:.1f} s; planned in "
-                  f"{1e3 * took:.0f} ms; min singularity margin planned "
-                  f"{response.min_singularity_margin:.4f}, executed "
-                  f"{result.min_singularity_margin:.4f}; "
-                  f"driver: {'done' if result.error_code == 0 else result.error_msg}, platform at "
-                  f"alpha = {math.degrees(result.final_pose.alpha):.2f} deg")
-            if result.error_code != 0:
-                code = 1
-            data = {"waypoints": [{"joints": r, "pose": [p.x, p.y, p.alpha]}
-                                  for r, p in zip(legs, response.poses)],
-                    "global_paths": [list(g.patch_ids) for g in response.global_paths],
-                    "path_index": response.path_index}
-            (OUT / f"{name}.json").write_text(json.dumps(data))
+            data = _run_example(name, q1, q2, plan, reset, execute)
+            code = code or data.pop("failed")
             plan_figure(roadmap, data).savefig(OUT / f"{name}.png", dpi=110)
+        # The full 3-DOF roadmap: the builder switches to it (first run: a
+        # build of about 25 s, then the cache), the planner swaps roadmaps.
+        print("switching the builder to the full 3-DOF roadmap (all legs free) ...")
+        switch = node.create_client(SetParameters, "/roadmap_builder/set_parameters")
+        if not switch.wait_for_service(timeout_sec=TIMEOUT):
+            raise TimeoutError("the builder's parameter service is not available")
+        answer = _wait(switch.call_async(SetParameters.Request(
+            parameters=[Parameter("full", value=True).to_parameter_msg()])))
+        if not answer.results[0].successful:
+            raise RuntimeError(f"the builder refused full: {answer.results[0].reason}")
+        q1, q2 = FULL_EXAMPLE
+        probe = PlanPath.Request(start=_configuration(q1), goal=_configuration(q2),
+                                 feasibility_only=True)
+        deadline = time.monotonic() + 4 * TIMEOUT
+        while _wait(plan.call_async(probe)).error_code in (
+                PlanPath.Response.ERROR_RHO1_MISMATCH, PlanPath.Response.ERROR_NO_ROADMAP):
+            if time.monotonic() > deadline:
+                raise TimeoutError("the planner got no full roadmap")
+            time.sleep(0.5)
+        data = _run_example("full_3dof_pocket_rho1_moves", q1, q2, plan, reset, execute)
+        code = code or data.pop("failed")
+        rho1 = [w["joints"][0] for w in data["waypoints"]]
+        print(f"full_3dof_pocket_rho1_moves: rho1 went from {rho1[0]:g} down to "
+              f"{min(rho1):.2f} and back (at fixed rho1 = {q1[0]:g} these two modes of the "
+              f"same legs are not connected)")
     finally:
         executor.shutdown(timeout_sec=10.0)
         spinner.join(timeout=10.0)

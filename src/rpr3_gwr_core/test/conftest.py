@@ -52,13 +52,3 @@ def coarse_paper_roadmap():
     """A cheap roadmap (step 0.5) for export and figure tests."""
     return build_roadmap(PAPER_GEOMETRY, rho1_slice(step=0.5))
 
-
-@pytest.fixture(scope="session")
-def full_roadmap(roadmap_cache):
-    """The full 3-DOF roadmap of the default box, from the session's cache."""
-    from rpr3_gwr_core.io.cache import cached_roadmap
-    from rpr3_gwr_core.paper import FULL_BASE_GRID, FULL_REFINEMENT
-
-    roadmap, _ = cached_roadmap(PAPER_GEOMETRY, FULL_BASE_GRID, roadmap_cache,
-                                refinement=FULL_REFINEMENT)
-    return roadmap

@@ -14,8 +14,8 @@ import numpy as np
 from builtin_interfaces.msg import Duration
 from rpr3_gwr_core.exceptions import InvalidInputError
 from rpr3_gwr_core.mechanisms import Geometry
-from rpr3_gwr_core.workspace import (Axis, Grid, NSolutionField, Roadmap, Segmentation,
-                                     roadmap_graph)
+from rpr3_gwr_core.workspace import (AdaptiveGrid, Axis, Grid, NSolutionField, Roadmap,
+                                     Segmentation, roadmap_graph)
 from rpr3_gwr_core.workspace.cusps import known_cusps
 from rpr3_gwr_msgs.msg import AxisLinks, FixedJoint, GridAxis, PlatformPose
 from rpr3_gwr_msgs.msg import Cusp as CuspMsg
@@ -72,18 +72,37 @@ def geometry_from_msg(msg):
 
 
 def grid_to_msg(grid):
-    return GridMsg(axes=[GridAxis(joint=a.joint, min=a.low, max=a.high, step=a.step,
-                                  count=a.count) for a in grid.axes],
-                   fixed=[FixedJoint(joint=j, value=v) for j, v in grid.fixed])
+    """A uniform or adaptive grid as a rpr3_gwr_msgs/Grid."""
+    adaptive = isinstance(grid, AdaptiveGrid)
+    base = grid.base if adaptive else grid
+    msg = GridMsg(axes=[GridAxis(joint=a.joint, min=a.low, max=a.high, step=a.step,
+                                 count=a.count) for a in base.axes],
+                  fixed=[FixedJoint(joint=j, value=v) for j, v in base.fixed])
+    if adaptive:
+        msg.refinement = grid.refinement
+        msg.refined_blocks = _pack("I", grid.blocks, np.uint32)
+    return msg
 
 
 def grid_from_msg(msg):
+    """Inverse of :func:`grid_to_msg`.
+
+    Raises
+    ------
+    InvalidInputError
+        If the counts do not match the ranges and steps, or the refinement
+        or its blocks do not fit the grid.
+    """
     grid = Grid(axes=tuple(Axis(a.joint, a.min, a.max, a.step) for a in msg.axes),
                 fixed=tuple((f.joint, f.value) for f in msg.fixed))
     counts = tuple(a.count for a in msg.axes)
     if grid.shape != counts:
         raise InvalidInputError(f"grid message: counts {counts} do not match its ranges and "
                                 f"steps {grid.shape}")
+    if msg.refinement:
+        blocks = np.frombuffer(msg.refined_blocks, np.uint32) if len(msg.refined_blocks) \
+            else np.zeros(0, np.uint32)
+        return AdaptiveGrid(grid, msg.refinement, blocks)
     return grid
 
 

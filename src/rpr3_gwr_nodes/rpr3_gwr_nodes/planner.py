@@ -224,8 +224,8 @@ def _named(state):
 
 
 def _rho1(planner):
-    """The roadmap's fixed rho1 (joint 0 of the 3-RPR)."""
-    return planner.roadmap.grid.fixed_value(0)
+    """The roadmap's fixed rho1 (joint 0 of the 3-RPR), NaN when it is free."""
+    return dict(planner.roadmap.grid.fixed).get(0, math.nan)
 
 
 def _error(response, code, message, feasibility=PlanPath.Response.FEASIBILITY_UNKNOWN):

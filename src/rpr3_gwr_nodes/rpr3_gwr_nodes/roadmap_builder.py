@@ -19,6 +19,13 @@ each axis, at most ``_MAX_CELLS``, some cell with a direct-kinematic solution)
 and refused with a reason, else the roadmap is rebuilt and republished.  A
 rebuilt roadmap without a patch is not published: the parameters go back to
 the last published grid, whose roadmap stays latched.
+
+``full`` (default false) builds the full 3-DOF roadmap instead, all three
+legs free on the core's adaptive grid (``FULL_BASE_GRID`` refined
+``FULL_REFINEMENT`` times; the slice parameters are then unused), through the
+core's roadmap cache (``$RPR3_GWR_CACHE``, else ``~/.cache/rpr3-gwr``): about
+25 s the first time, 2 to 3 s from the cache.  It is published on the same
+topics; the maps and markers, drawn for 2-D grids, are not.
 """
 
 import time
@@ -30,8 +37,9 @@ from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rpr3_gwr_core.exceptions import GWRError
-from rpr3_gwr_core.paper import rho1_slice
-from rpr3_gwr_core.workspace import build_roadmap
+from rpr3_gwr_core.io.cache import cached_roadmap
+from rpr3_gwr_core.paper import FULL_BASE_GRID, FULL_REFINEMENT, rho1_slice
+from rpr3_gwr_core.workspace import AdaptiveGrid, build_roadmap
 from nav_msgs.msg import OccupancyGrid
 from rpr3_gwr_msgs.msg import NSolutionField, WorkspaceRoadmap
 from std_msgs.msg import Header
@@ -45,7 +53,7 @@ from .visualization import field_maps, roadmap_markers
 
 __all__ = ["RoadmapBuilder", "main"]
 
-_GRID_PARAMETERS = ("rho1", "rho2_range", "rho3_range", "step")
+_GRID_PARAMETERS = ("rho1", "rho2_range", "rho3_range", "step", "full")
 # Largest grid the builder accepts: about 4 million cells (2001 x 2001).
 _MAX_CELLS = 4_000_000
 # Cells sampled to tell at once whether a grid can give a roadmap at all,
@@ -74,6 +82,9 @@ class RoadmapBuilder(Node):
             description="Grid range of rho3, [min, max] [length unit]"))
         self.declare_parameter("step", 0.125, _length("Grid step [length unit]", low=0.001,
                                                       high=100.0))
+        self.declare_parameter("full", False, ParameterDescriptor(
+            description="Build the full 3-DOF roadmap (all legs free, adaptive grid, cached) "
+                        "instead of the slice at rho1"))
         self.field_pub = self.create_publisher(NSolutionField, "field", LATCHED_QOS)
         self.roadmap_pub = self.create_publisher(WorkspaceRoadmap, "roadmap", LATCHED_QOS)
         self.map_pubs = [self.create_publisher(OccupancyGrid, topic, LATCHED_QOS)
@@ -89,8 +100,11 @@ class RoadmapBuilder(Node):
         self._rebuild.trigger()
 
     def _grid(self, overrides=None):
+        """The slice the parameters ask for, or None for the full roadmap."""
         values = {name: self.get_parameter(name).value for name in _GRID_PARAMETERS}
         values.update(overrides or {})
+        if values["full"]:
+            return None
         return rho1_slice(values["rho1"], tuple(values["rho2_range"]),
                           tuple(values["rho3_range"]), values["step"])
 
@@ -100,6 +114,8 @@ class RoadmapBuilder(Node):
             return SetParametersResult(successful=True)
         try:
             grid = self._grid(overrides)
+            if grid is None:
+                return SetParametersResult(successful=True)
         except (GWRError, TypeError, ValueError) as exc:
             return SetParametersResult(successful=False, reason=f"invalid grid: {exc}")
         if min(grid.shape) < 2:
@@ -125,29 +141,43 @@ class RoadmapBuilder(Node):
         return np.count_nonzero(count) * grid.size / probe.size
 
     def _parameters_set(self, parameters):
-        published = None if self.roadmap is None else self.roadmap.grid
-        if any(p.name in _GRID_PARAMETERS for p in parameters) and self._grid() != published:
+        if any(p.name in _GRID_PARAMETERS for p in parameters) and (
+                self.roadmap is None or self._grid() != self._published_request):
             self._rebuild.trigger()
+
+    @property
+    def _published_request(self):
+        """What the published roadmap answers: its slice, or None if full."""
+        grid = self.roadmap.grid
+        return None if isinstance(grid, AdaptiveGrid) and grid.base == FULL_BASE_GRID else grid
 
     def _build(self):
         grid = self._grid()
-        n2, n3 = grid.shape
-        self.get_logger().info(f"building the roadmap: rho1 = {grid.fixed_value(0):g}, "
-                               f"{n2} x {n3} cells")
+        if grid is None:
+            self.get_logger().info("building the full 3-DOF roadmap (all legs free) or "
+                                   "loading it from the cache")
+        else:
+            n2, n3 = grid.shape
+            self.get_logger().info(f"building the roadmap: rho1 = {grid.fixed_value(0):g}, "
+                                   f"{n2} x {n3} cells")
         start = time.perf_counter()
 
         def progress(stage, fraction):
             self.get_logger().info(f"  {fraction:4.0%} {stage}")
 
         try:
-            roadmap = build_roadmap(self.geometry, grid, progress=progress)
+            if grid is None:
+                roadmap, _ = cached_roadmap(self.geometry, FULL_BASE_GRID, progress=progress,
+                                            refinement=FULL_REFINEMENT)
+            else:
+                roadmap = build_roadmap(self.geometry, grid, progress=progress)
         except Exception as exc:  # a failed build must not take the builder down
             self.get_logger().error(f"building the roadmap failed: {exc!r}")
             self._keep_last_good(grid)
             return
         seg = roadmap.segmentation
         if not seg.patches:
-            self.get_logger().error(f"the roadmap at rho1 = {grid.fixed_value(0):g} has no patch")
+            self.get_logger().error("the roadmap has no patch")
             self._keep_last_good(grid)
             return
         self.roadmap = roadmap
@@ -169,11 +199,15 @@ class RoadmapBuilder(Node):
         if self.roadmap is None:
             self.get_logger().error("no roadmap is published")
             return
-        good = self.roadmap.grid
+        good = self._published_request
+        self.get_logger().error("the published roadmap stays; the grid parameters go back "
+                                "to its grid")
+        if good is None:
+            self.set_parameters_atomically([Parameter("full", value=True)])
+            return
         rho2, rho3 = good.axes
-        self.get_logger().error(f"the roadmap for rho1 = {good.fixed_value(0):g} stays "
-                                "published; the grid parameters go back to its grid")
         self.set_parameters_atomically([
+            Parameter("full", value=False),
             Parameter("rho1", value=good.fixed_value(0)),
             Parameter("rho2_range", value=[rho2.low, rho2.high]),
             Parameter("rho3_range", value=[rho3.low, rho3.high]),

@@ -112,6 +112,13 @@ class AdaptiveGrid:
             flat[np.ravel_multi_index(tuple(inside.T), self.fine_shape)] = True
         return np.flatnonzero(flat)
 
+    def __eq__(self, other):
+        return (isinstance(other, AdaptiveGrid) and other.base == self.base
+                and other.refinement == self.refinement
+                and np.array_equal(other.blocks, self.blocks))
+
+    __hash__ = None
+
     # -- the Grid interface ---------------------------------------------------
 
     @property
