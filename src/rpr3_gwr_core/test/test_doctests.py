@@ -6,7 +6,7 @@ import importlib
 import pytest
 
 MODULES = ["rpr3_gwr_core", "rpr3_gwr_core.paper", "rpr3_gwr_core.workspace.field",
-           "rpr3_gwr_core.workspace.roadmap"]
+           "rpr3_gwr_core.workspace.roadmap", "rpr3_gwr_core.workspace.adaptive"]
 
 
 @pytest.mark.parametrize("name", MODULES)

@@ -153,7 +153,7 @@ class PlannerNode(Node):
         stamp = roadmap.header.stamp
         self.get_logger().info(
             f"planning on a new roadmap (stamp {stamp.sec}.{stamp.nanosec:09d}): "
-            f"rho1 = {_rho1(planner):g}, {len(planner.roadmap.graph)} patches, ready in "
+            f"{_describe(planner.roadmap.grid)}, {len(planner.roadmap.graph)} patches, ready in "
             f"{time.perf_counter() - start:.3f} s")
         self.ready.set()
 
@@ -221,6 +221,11 @@ def _named(state):
         response.roadmap_stamp = state.stamp
         response.roadmap_rho1 = _rho1(state.planner)
     return response
+
+
+def _describe(grid):
+    rho1 = dict(grid.fixed).get(0)
+    return f"rho1 = {rho1:g}" if rho1 is not None else f"all legs free, {grid.size} cells"
 
 
 def _rho1(planner):

@@ -39,6 +39,7 @@ a uniform grid.
 
 import itertools
 import math
+import numbers
 
 import numpy as np
 from scipy import sparse
@@ -78,7 +79,8 @@ class AdaptiveGrid:
     def __init__(self, base, refinement, blocks):
         if not isinstance(base, Grid):
             raise InvalidInputError(f"an adaptive grid refines a Grid, got {type(base).__name__}")
-        if isinstance(refinement, bool) or int(refinement) != refinement or refinement < 2:
+        if (isinstance(refinement, bool) or not isinstance(refinement, numbers.Integral)
+                or refinement < 2):
             raise InvalidInputError(f"refinement is an integer >= 2, got {refinement!r}")
         if min(base.shape) < 2:
             raise InvalidInputError(f"an adaptive grid needs two base points per axis, "
