@@ -36,23 +36,13 @@ def field_figure(roadmap):
     grid = seg.field.grid
     u, v, labels, fixed = _plane(roadmap)
     shape = grid.shape
-    count = seg.field.count.reshape(shape).astype(float)
     region = seg.region.reshape(shape)
-    count[region == 0] = np.nan
-    fig = Figure(figsize=(7, 6))
-    ax = fig.add_subplot()
-    image = ax.imshow(count.T, origin="lower", extent=(u[0], u[-1], v[0], v[-1]),
-                      cmap="viridis", vmin=0, vmax=seg.field.max_solutions,
-                      interpolation="nearest")
-    edges = np.zeros(shape, dtype=bool)
-    edges[:-1, :] |= region[:-1, :] != region[1:, :]
-    edges[:, :-1] |= region[:, :-1] != region[:, 1:]
-    ax.contour(u, v, edges.T.astype(float), levels=[0.5], colors="k", linewidths=0.6)
+    fig, ax = _regions_image(u, v, seg.field.count.reshape(shape), region,
+                             seg.field.max_solutions)
     for r in range(1, seg.n_regions + 1):
         i, j = _interior_point(region == r)
         ax.text(u[i], v[j], str(r), ha="center", va="center", fontsize=10,
                 bbox={"boxstyle": "circle", "fc": "white", "ec": "k"})
-    fig.colorbar(image, ax=ax, label="number of solutions")
     cusps = np.array([c.joints[list(grid.axis_joints)] for c in known_cusps(roadmap)])
     if cusps.size:
         ax.plot(cusps[:, 0], cusps[:, 1], "r^", ms=8, label="cusp")
@@ -99,18 +89,9 @@ def slice_figure(roadmap, fixed, cusps=()):
     if np.any(cells < 0):
         raise InvalidInputError(f"the slice {dict(fixed)} leaves the grid")
     seg = roadmap.segmentation
-    count = seg.field.count[cells].reshape(u.size, v.size).astype(float)
     region = seg.region[cells].reshape(u.size, v.size)
-    count[region == 0] = np.nan
-    fig = Figure(figsize=(7, 6))
-    ax = fig.add_subplot()
-    image = ax.imshow(count.T, origin="lower", extent=(u[0], u[-1], v[0], v[-1]),
-                      cmap="viridis", vmin=0, vmax=seg.field.max_solutions,
-                      interpolation="nearest")
-    edges = np.zeros(region.shape, dtype=bool)
-    edges[:-1, :] |= region[:-1, :] != region[1:, :]
-    edges[:, :-1] |= region[:, :-1] != region[:, 1:]
-    ax.contour(u, v, edges.T.astype(float), levels=[0.5], colors="k", linewidths=0.6)
+    fig, ax = _regions_image(u, v, seg.field.count[cells].reshape(u.size, v.size), region,
+                             seg.field.max_solutions)
     for r in range(1, seg.n_regions + 1):
         pieces, n = label_pieces(region == r)
         for piece in range(1, n + 1):
@@ -118,7 +99,6 @@ def slice_figure(roadmap, fixed, cusps=()):
                 i, j = _interior_point(pieces == piece)
                 ax.text(u[i], v[j], str(r), ha="center", va="center", fontsize=9,
                         bbox={"boxstyle": "circle", "fc": "white", "ec": "k"})
-    fig.colorbar(image, ax=ax, label="number of solutions")
     at = dict(fixed)
     cusps = np.array([c.joints[[axes[0].joint, axes[1].joint]] for c in cusps])
     if cusps.size:
@@ -129,6 +109,23 @@ def slice_figure(roadmap, fixed, cusps=()):
     plane = ", ".join(f"{names[j]} = {value:g}" for j, value in sorted(at.items()))
     ax.set_title(f"slice {plane} of the {grid.ndim}-D roadmap: solutions and regions")
     return fig
+
+
+def _regions_image(u, v, count, region, max_solutions):
+    """A figure of the number of solutions over a plane (white off every
+    region), region boundaries drawn dark, with its colour bar."""
+    count = count.astype(float)
+    count[region == 0] = np.nan
+    fig = Figure(figsize=(7, 6))
+    ax = fig.add_subplot()
+    image = ax.imshow(count.T, origin="lower", extent=(u[0], u[-1], v[0], v[-1]),
+                      cmap="viridis", vmin=0, vmax=max_solutions, interpolation="nearest")
+    edges = np.zeros(region.shape, dtype=bool)
+    edges[:-1, :] |= region[:-1, :] != region[1:, :]
+    edges[:, :-1] |= region[:, :-1] != region[:, 1:]
+    ax.contour(u, v, edges.T.astype(float), levels=[0.5], colors="k", linewidths=0.6)
+    fig.colorbar(image, ax=ax, label="number of solutions")
+    return fig, ax
 
 
 def _plane(roadmap):

@@ -45,10 +45,10 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse.csgraph import dijkstra
 
-from ..exceptions import InvalidInputError, OutOfGridError
+from ..exceptions import InvalidInputError
 from .continuity import match_solutions
 from .field import compute_field
-from .grid import Axis, Grid
+from .grid import Axis, Grid, GridBase
 
 __all__ = ["AdaptiveGrid", "refine", "grid_from_dict", "DEFAULT_REFINEMENT",
            "DEFAULT_REFINE_MARGIN"]
@@ -57,7 +57,7 @@ DEFAULT_REFINEMENT = 4
 DEFAULT_REFINE_MARGIN = 0.02
 
 
-class AdaptiveGrid:
+class AdaptiveGrid(GridBase):
     """A base grid with some of its blocks refined (module doc).
 
     Parameters
@@ -129,34 +129,9 @@ class AdaptiveGrid:
         return self.base.fixed
 
     @property
-    def ndim(self):
-        return self.base.ndim
-
-    @property
-    def n_joints(self):
-        return self.base.n_joints
-
-    @property
-    def axis_joints(self):
-        return self.base.axis_joints
-
-    @property
     def size(self):
         """Number of cells."""
         return int(self._index.size)
-
-    @property
-    def steps(self):
-        """Fine step of each axis [joint unit]."""
-        return tuple(a.step for a in self.axes)
-
-    @property
-    def step(self):
-        """The smallest fine step [joint unit]."""
-        return min(self.steps)
-
-    def fixed_value(self, joint):
-        return self.base.fixed_value(joint)
 
     def _multi(self, cells=None):
         index = self._index if cells is None else self._index[cells]
@@ -167,23 +142,8 @@ class AdaptiveGrid:
         low = np.array([a.low for a in self.axes])
         return low + self._multi() * np.array(self.steps)
 
-    def joints(self):
-        """Joint vector of every cell, shape (size, n_joints)."""
-        out = np.empty((self.size, self.n_joints))
-        out[:, list(self.axis_joints)] = self.coordinates()
-        for joint, value in self.fixed:
-            out[:, joint] = value
-        return out
-
-    def joints_of(self, cell):
-        """Joint vector of one cell, shape (n_joints,)."""
-        index = np.unravel_index(int(self._index[int(cell)]), self.fine_shape)
-        out = np.empty(self.n_joints)
-        for axis, k in zip(self.axes, index):
-            out[axis.joint] = axis.low + axis.step * k
-        for joint, value in self.fixed:
-            out[joint] = value
-        return out
+    def _lattice_index(self, cell):
+        return np.unravel_index(int(self._index[int(cell)]), self.fine_shape)
 
     def _lookup(self, fine_flat):
         """Cell of each fine flat index, -1 where it is no cell."""
@@ -225,14 +185,7 @@ class AdaptiveGrid:
         OutOfGridError
             If the point lies farther than half a fine step outside the grid.
         """
-        values = np.array([float(joints[a.joint]) for a in self.axes])
-        if not np.all(np.isfinite(values)):
-            raise InvalidInputError(f"cell_of needs finite joints, got {values.tolist()}")
-        for value, axis in zip(values, self.axes):
-            k = (value - axis.low) / axis.step
-            if not -0.5 <= k < axis.count - 0.5:
-                raise OutOfGridError(f"{tuple(values.tolist())} lies outside the grid "
-                                     f"{[(a.low, a.high) for a in self.axes]}")
+        values = np.array(self._checked_point(joints))
         return int(self.cells_of(values[None, :])[0])
 
     def pairs(self):

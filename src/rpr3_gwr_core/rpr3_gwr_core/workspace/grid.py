@@ -18,7 +18,7 @@ from scipy.ndimage import distance_transform_edt
 from ..exceptions import InvalidInputError, OutOfGridError
 from .continuity import neighbour_pairs
 
-__all__ = ["Axis", "Grid"]
+__all__ = ["Axis", "GridBase", "Grid"]
 
 
 def _real(value, name):
@@ -76,8 +76,74 @@ class Axis:
         return self.low + self.step * np.arange(self.count)
 
 
+class GridBase:
+    """What every grid derives from its ``axes`` (the lattice its cells lie
+    on), its ``fixed`` joints, ``coordinates()`` and ``_lattice_index(cell)``."""
+
+    @property
+    def ndim(self):
+        """Number of axes d."""
+        return len(self.axes)
+
+    @property
+    def n_joints(self):
+        """Number of joints of the mechanism."""
+        return len(self.axes) + len(self.fixed)
+
+    @property
+    def steps(self):
+        """Step of each axis [joint unit]."""
+        return tuple(a.step for a in self.axes)
+
+    @property
+    def step(self):
+        """The smallest step [joint unit]."""
+        return min(self.steps)
+
+    @property
+    def axis_joints(self):
+        """Joint index of each axis."""
+        return tuple(a.joint for a in self.axes)
+
+    def fixed_value(self, joint):
+        """Value of a fixed joint."""
+        return dict(self.fixed)[joint]
+
+    def _checked_point(self, joints):
+        """The axis joints of a joint vector, finite and within half a step of
+        the lattice (else ``InvalidInputError``, ``OutOfGridError``)."""
+        values = [float(joints[a.joint]) for a in self.axes]
+        if not all(math.isfinite(v) for v in values):
+            raise InvalidInputError(f"cell_of needs finite joints, got {values}")
+        for value, axis in zip(values, self.axes):
+            # Compared as floats: a huge joint value would overflow int().
+            k = (value - axis.low) / axis.step
+            if not -0.5 <= k < axis.count - 0.5:
+                raise OutOfGridError(f"{tuple(values)} lies outside the grid "
+                                     f"{[(a.low, a.high) for a in self.axes]}")
+        return values
+
+    def joints(self):
+        """Joint vector of every cell, shape (size, n_joints)."""
+        out = np.empty((self.size, self.n_joints))
+        out[:, list(self.axis_joints)] = self.coordinates()
+        for joint, value in self.fixed:
+            out[:, joint] = value
+        return out
+
+    def joints_of(self, cell):
+        """Joint vector of one cell, shape (n_joints,)."""
+        index = self._lattice_index(cell)
+        out = np.empty(self.n_joints)
+        for axis, k in zip(self.axes, index):
+            out[axis.joint] = axis.low + axis.step * k
+        for joint, value in self.fixed:
+            out[joint] = value
+        return out
+
+
 @dataclass(frozen=True)
-class Grid:
+class Grid(GridBase):
     """A uniform grid over some joints of a mechanism.
 
     Attributes
@@ -126,16 +192,6 @@ class Grid:
         return cls(axes=axes, fixed=tuple((fixed or {}).items()))
 
     @property
-    def ndim(self):
-        """Number of axes d."""
-        return len(self.axes)
-
-    @property
-    def n_joints(self):
-        """Number of joints of the mechanism."""
-        return len(self.axes) + len(self.fixed)
-
-    @property
     def shape(self):
         """Number of cells along each axis."""
         return tuple(a.count for a in self.axes)
@@ -145,47 +201,13 @@ class Grid:
         """Total number of cells."""
         return math.prod(self.shape)
 
-    @property
-    def steps(self):
-        """Step of each axis [joint unit]."""
-        return tuple(a.step for a in self.axes)
-
-    @property
-    def step(self):
-        """The smallest step [joint unit]."""
-        return min(self.steps)
-
-    @property
-    def axis_joints(self):
-        """Joint index of each axis."""
-        return tuple(a.joint for a in self.axes)
-
-    def fixed_value(self, joint):
-        """Value of a fixed joint."""
-        return dict(self.fixed)[joint]
-
     def coordinates(self):
         """Axis values of every cell, shape (size, ndim), row-major."""
         mesh = np.meshgrid(*[a.values for a in self.axes], indexing="ij")
         return np.stack([m.ravel() for m in mesh], axis=-1)
 
-    def joints(self):
-        """Joint vector of every cell, shape (size, n_joints), row-major."""
-        out = np.empty((self.size, self.n_joints))
-        out[:, list(self.axis_joints)] = self.coordinates()
-        for joint, value in self.fixed:
-            out[:, joint] = value
-        return out
-
-    def joints_of(self, cell):
-        """Joint vector of one flat cell index, shape (n_joints,)."""
-        index = np.unravel_index(int(cell), self.shape)
-        out = np.empty(self.n_joints)
-        for axis, k in zip(self.axes, index):
-            out[axis.joint] = axis.low + axis.step * k
-        for joint, value in self.fixed:
-            out[joint] = value
-        return out
+    def _lattice_index(self, cell):
+        return np.unravel_index(int(cell), self.shape)
 
     def cell_of(self, joints):
         """Flat index of the cell nearest a joint vector (its axis joints).
@@ -197,17 +219,9 @@ class Grid:
         OutOfGridError
             If the point lies farther than half a step outside the grid.
         """
-        values = [float(joints[a.joint]) for a in self.axes]
-        if not all(math.isfinite(v) for v in values):
-            raise InvalidInputError(f"cell_of needs finite joints, got {values}")
-        index = []
-        for value, axis in zip(values, self.axes):
-            # Compared as floats first: a huge joint value would overflow int().
-            k = (value - axis.low) / axis.step
-            if not -0.5 <= k < axis.count - 0.5:
-                raise OutOfGridError(f"{tuple(values)} lies outside the grid "
-                                     f"{[(a.low, a.high) for a in self.axes]}")
-            index.append(min(int(round(k)), axis.count - 1))
+        values = self._checked_point(joints)
+        index = [min(int(round((v - a.low) / a.step)), a.count - 1)
+                 for v, a in zip(values, self.axes)]
         return int(np.ravel_multi_index(index, self.shape))
 
     def cells_of(self, points):
