@@ -7,7 +7,6 @@ import threading
 import time
 
 import numpy as np
-import pytest
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -81,8 +80,7 @@ def test_a_builder_in_full_mode_feeds_a_planner_that_moves_rho1(ros_context, ful
             node.destroy_node()
 
 
-@pytest.mark.parametrize("value", [True])
-def test_full_mode_is_a_declared_parameter(ros_context, value):
+def test_full_mode_is_a_declared_parameter(ros_context):
     builder = RoadmapBuilder(context=ros_context, parameter_overrides=[
         Parameter("full", value=False), Parameter("step", value=1.0)])
     try:

@@ -51,4 +51,3 @@ def cases():
 def coarse_paper_roadmap():
     """A cheap roadmap (step 0.5) for export and figure tests."""
     return build_roadmap(PAPER_GEOMETRY, rho1_slice(step=0.5))
-
