@@ -1,12 +1,17 @@
 """Benchmark: the planner's service as real processes on loopback DDS.
 
 Run on demand (after ``source ros2_ws/env.sh``):
-    python bench/bench_service.py [--clients 8] [--requests 100]
+    python bench/bench_service.py [--clients 8] [--requests 100] [--full]
+
+``--full`` has the builder publish the full 3-DOF roadmap (from the roadmap
+cache, built there first if needed) and the clients ask for the pocket
+example of issue 10, with rho1 moving.
 
 Starts roadmap_builder and planner as processes (the localhost Fast DDS
 profile, a domain of their own), then:
 
-* publish-to-usable: from the builder's "published" log line to the
+* publish-to-usable: from the builder's call of ``publish`` (its
+  "published" log line minus the publishing time it reports) to the
   planner's "planning on a new roadmap" line (transport of the field and
   roadmap messages plus the planner's rebuild of its state);
 * round trips of PlanPath for the paper's two examples (alternating),
@@ -46,10 +51,12 @@ from rpr3_gwr_msgs.srv import PlanPath  # noqa: E402
 D = math.radians
 EXAMPLES = [((17.0, 12.0, 18.0, D(122.82)), (17.0, 10.0, 25.0, D(-24.24))),
             ((17.0, 20.0, 25.0, D(29.47)), (17.0, 20.0, 25.0, D(96.13)))]
+FULL_EXAMPLES = [((27.5, 31.67154934, 2.14117832, D(-101.0)),
+                  (27.5, 31.67154934, 2.14117832, D(158.048263)))]
 
 
-def _request(k):
-    start, goal = EXAMPLES[k % 2]
+def _request(k, examples=EXAMPLES):
+    start, goal = examples[k % len(examples)]
     return PlanPath.Request(start=Configuration(rho1=start[0], rho2=start[1], rho3=start[2],
                                                 alpha=start[3]),
                             goal=Configuration(rho1=goal[0], rho2=goal[1], rho3=goal[2],
@@ -69,11 +76,16 @@ def _call(client, request, timeout=60.0):
     return elapsed
 
 
-def _stamp(path, pattern):
+def _line(path, pattern):
     for line in path.read_text().splitlines():
         if re.search(pattern, line):
-            return float(re.search(r"\[(\d+\.\d+)\]", line).group(1))
+            return line
     return None
+
+
+def _stamp(path, pattern):
+    line = _line(path, pattern)
+    return None if line is None else float(re.search(r"\[(\d+\.\d+)\]", line).group(1))
 
 
 def _summary(times, wall):
@@ -86,12 +98,18 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--clients", type=int, default=8)
     parser.add_argument("--requests", type=int, default=100)
+    parser.add_argument("--full", action="store_true",
+                        help="the full 3-DOF roadmap and the pocket example")
     args = parser.parse_args()
+    examples = FULL_EXAMPLES if args.full else EXAMPLES
     logs = pathlib.Path(tempfile.mkdtemp(prefix="rpr3_bench_"))
     processes = []
     for name in ("roadmap_builder", "planner"):
         log = open(logs / f"{name}.log", "w")
-        processes.append(subprocess.Popen([str(LIB / name)], stdout=log, stderr=subprocess.STDOUT))
+        command = [str(LIB / name)]
+        if args.full and name == "roadmap_builder":
+            command += ["--ros-args", "-p", "full:=true"]
+        processes.append(subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT))
     rclpy.init()
     nodes = [Node(f"bench_client_{k}") for k in range(args.clients)]
     clients = [n.create_client(PlanPath, "plan_path") for n in nodes]
@@ -105,22 +123,26 @@ def main():
         deadline = time.monotonic() + 120.0
         while time.monotonic() < deadline:
             try:
-                _call(clients[0], _request(0))
+                _call(clients[0], _request(0, examples))
                 break
             except RuntimeError:  # no roadmap yet
                 time.sleep(0.2)
         published = _stamp(logs / "roadmap_builder.log", "published the roadmap")
+        line = _line(logs / "roadmap_builder.log", "published the roadmap")
+        sending = float(re.search(r"published in (\d+\.\d+) s", line).group(1))
         usable = _stamp(logs / "planner.log", "planning on a new roadmap")
-        print(json.dumps({"publish_to_usable_s": round(usable - published, 3)}))
+        print(json.dumps({"publish_to_usable_s": round(usable - published + sending, 3),
+                          "of_which_publish_call_s": sending, "builder": line.split("]: ")[-1]}))
         for k in range(10):  # warm the planner's patch profiles
-            _call(clients[0], _request(k))
+            _call(clients[0], _request(k, examples))
         begin = time.perf_counter()
-        single = [_call(clients[0], _request(k)) for k in range(args.requests)]
+        single = [_call(clients[0], _request(k, examples)) for k in range(args.requests)]
         print(json.dumps(dict(_summary(single, time.perf_counter() - begin), clients=1)))
         results = [[] for _ in clients]
 
         def run(k):
-            results[k] = [_call(clients[k], _request(j + k)) for j in range(args.requests)]
+            results[k] = [_call(clients[k], _request(j + k, examples))
+                          for j in range(args.requests)]
 
         threads = [threading.Thread(target=run, args=(k,)) for k in range(len(clients))]
         begin = time.perf_counter()

@@ -165,13 +165,15 @@ def roadmap_from_msgs(field_msg, roadmap_msg):
                                 f"{field_msg.pose_size} coordinates, the mechanism has "
                                 f"{slots} of {size}")
     n = grid.size
+    # Views of the message's buffers (they keep the message's arrays alive):
+    # the full roadmap's poses alone are 240 MB.
     field = NSolutionField(
         mechanism=geometry, grid=grid,
-        count=_unpack(field_msg.n_solutions, np.uint8, n, "n_solutions").copy(),
+        count=_unpack(field_msg.n_solutions, np.uint8, n, "n_solutions"),
         poses=_unpack(field_msg.poses, np.float64, n * slots * size, "poses").reshape(
-            n, slots, size).copy(),
+            n, slots, size),
         margin=_unpack(field_msg.singularity_margin, np.float64, n * slots,
-                       "singularity_margin").reshape(n, slots).copy())
+                       "singularity_margin").reshape(n, slots))
     links = [np.frombuffer(axis.slots, np.int8).reshape(-1, slots) if len(axis.slots)
              else np.zeros((0, slots), np.int8) for axis in field_msg.links]
     segmentation = Segmentation.from_arrays(

@@ -411,14 +411,13 @@ def _describe_patches(field, region, patch, links):
     order = np.argsort(ids, kind="stable")
     ids, cells_all, slots_all = ids[order], cells_all[order], slots_all[order]
     bounds = np.flatnonzero(np.diff(ids)) + 1
-    aspect = field.aspect
     patches = {}
     layers = {}
     for cells, slots in zip(np.split(cells_all, bounds), np.split(slots_all, bounds)):
         if cells.size == 0:
             continue
         pid = int(patch[cells[0], slots[0]])
-        aspects = np.unique(aspect[cells, slots])
+        aspects = np.unique(np.sign(field.margin[cells, slots]).astype(int))
         if aspects.size != 1:
             raise InvalidInputError(f"patch {pid} mixes aspects {aspects}")
         # Its own cells share its region; cells it took from unresolved sets have 0.
