@@ -13,6 +13,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from rpr3_gwr_core.mechanisms.rpr3 import direct_kinematics
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
@@ -260,3 +261,16 @@ def test_the_node_answers_a_good_request_after_the_fuzzing(service):
     assert response.success, response.error_msg
     check_sound(PlanPath.Request(start=_configuration(Q1), goal=_configuration(Q2)), response,
                 service.stamp)
+
+
+def test_the_clearance_parameter_sets_the_margin_paths_keep(service):
+    node = service.planner
+    default = node.get_parameter("clearance").value
+    try:
+        assert not node.set_parameters([Parameter("clearance", value=-0.1)])[0].successful
+        assert node.set_parameters([Parameter("clearance", value=0.02)])[0].successful
+        response = service.plan(MODE_A, MODE_B)
+        assert response.success, response.error_msg
+        assert response.min_singularity_margin >= 0.01
+    finally:
+        node.set_parameters([Parameter("clearance", value=default)])

@@ -10,7 +10,7 @@ setup(
         ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
         ("share/" + package_name, ["package.xml"]),
     ],
-    install_requires=["setuptools", "numpy", "scipy", "networkx", "matplotlib"],
+    install_requires=["setuptools", "numpy", "scipy", "networkx", "matplotlib", "numba"],
     zip_safe=True,
     maintainer="rpr3-gwr maintainers",
     maintainer_email="maintainers@rpr3-gwr.dev",

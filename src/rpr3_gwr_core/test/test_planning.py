@@ -16,7 +16,7 @@ from rpr3_gwr_core.planning.global_planning import feasibility, global_paths
 from rpr3_gwr_core.mechanisms.rpr3 import inverse_kinematics, singularity_margin
 from rpr3_gwr_core.planning.planner import PlanOptions, Planner
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
-from rpr3_gwr_core.planning.trajectory import chaikin, shortcut, time_parameterize
+from rpr3_gwr_core.planning.trajectory import cut_corners, shortcut, time_parameterize
 from rpr3_gwr_core.planning.validation import validate_path
 
 D = math.radians
@@ -186,13 +186,22 @@ def test_every_plan_validates_and_infeasible_only_without_roadmap_path(planner, 
     assert np.all(np.sign(singularity_margin(plan.poses)) == check.aspect)
 
 
-def test_shortcut_keeps_the_ends_and_chaikin_keeps_the_endpoints():
+def test_shortcut_keeps_the_ends_and_cutting_corners_keeps_the_endpoints():
     points = np.array([[0, 0], [1, 0], [2, 0], [3, 0], [3, 1]], dtype=float)
     keep = shortcut(points, lambda i, j: points[i, 1] == points[j, 1] or j - i == 1)
     assert keep[0] == 0 and keep[-1] == 4 and len(keep) < 5
-    rounded = chaikin(points[keep])
+    rounded, origin = cut_corners(points[keep], np.ones(len(keep), dtype=bool))
     np.testing.assert_allclose(rounded[0], points[0])
     np.testing.assert_allclose(rounded[-1], points[-1])
+    assert np.all(np.bincount(origin)[1:-1] == 2)
+    np.testing.assert_allclose(rounded[-3:-1], [[2.75, 0], [3, 0.25]])
+
+
+def test_cut_corners_cuts_only_the_chosen_corners():
+    points = np.array([[0, 0], [4, 0], [4, 4], [8, 4]], dtype=float)
+    rounded, origin = cut_corners(points, [True, False, True, True])
+    np.testing.assert_array_equal(origin, [0, 1, 2, 2, 3])
+    np.testing.assert_allclose(rounded, [[0, 0], [4, 0], [4, 3], [5, 4], [8, 4]])
 
 
 def test_time_parameterize_rejects_bad_limits():

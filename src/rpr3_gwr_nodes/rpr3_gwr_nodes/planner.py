@@ -28,7 +28,7 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallb
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rpr3_gwr_core.exceptions import GWRError, InvalidInputError
-from rpr3_gwr_core.planning import PlanOptions, Planner
+from rpr3_gwr_core.planning import DEFAULT_CLEARANCE, PlanOptions, Planner
 from rpr3_gwr_msgs.msg import GlobalPath, NSolutionField, PlatformPose, WorkspaceRoadmap
 from rpr3_gwr_msgs.srv import PlanPath
 from std_msgs.msg import Header
@@ -109,6 +109,11 @@ class PlannerNode(Node):
         self.declare_parameter("default_max_acceleration", 2.0, ParameterDescriptor(
             description="Joint acceleration limit used when a request gives none "
                         "[length unit/s^2]", floating_point_range=positive))
+        self.declare_parameter("clearance", DEFAULT_CLEARANCE, ParameterDescriptor(
+            description="Margin (normalised |det Jx|) that paths keep from the singular "
+                        "locus wherever the roadmap allows; they keep half of it in "
+                        "validation, or what the start and goal allow",
+            floating_point_range=[FloatingPointRange(from_value=0.0, to_value=0.5)]))
         self._state = None
         self._messages = {}
         updates = MutuallyExclusiveCallbackGroup()
@@ -168,7 +173,8 @@ class PlannerNode(Node):
         tolerance = request.alpha_tolerance or math.radians(1.0)
         return PlanOptions(smooth=request.smooth, weighted=request.weighted,
                            feasibility_only=request.feasibility_only, max_velocity=limits[0],
-                           max_acceleration=limits[1], mode_tol=tolerance)
+                           max_acceleration=limits[1], mode_tol=tolerance,
+                           clearance=self.get_parameter("clearance").value)
 
     def _on_plan(self, request, response):
         state = self._state

@@ -1,12 +1,13 @@
 """Planning on a roadmap: locating configurations, global and local paths,
-smoothing, timing and the independent validator."""
+shortcutting, smoothing, timing and the independent validator."""
 
 from .global_planning import Feasibility, GlobalPath, RoadmapIndex, feasibility, global_paths
 from .locate import Location, locate
-from .planner import Plan, PlanOptions, Planner
+from .planner import DEFAULT_CLEARANCE, Plan, PlanOptions, Planner
 from .trajectory import time_parameterize
 from .validation import DEFAULT_MAX_STEP, DEFAULT_MIN_MARGIN, Validation, validate_path
 
 __all__ = ["Feasibility", "GlobalPath", "RoadmapIndex", "feasibility", "global_paths",
-           "Location", "locate", "Plan", "PlanOptions", "Planner", "time_parameterize",
+           "Location", "locate", "DEFAULT_CLEARANCE", "Plan", "PlanOptions", "Planner",
+           "time_parameterize",
            "DEFAULT_MAX_STEP", "DEFAULT_MIN_MARGIN", "Validation", "validate_path"]

@@ -1,35 +1,41 @@
 """Local planning inside patches and stitching along a global path
 (paper section 3.3).
 
-Every cell of a patch costs ``1 + clearance_weight / d``, where ``d`` is its
-distance in cells to the nearest cell outside the patch (singular edge, gate,
-other region or grid edge alike, as in the paper; Euclidean on uniform grids,
-along faces on adaptive ones), so paths keep clear of every boundary until
-they must cross the planned gate; cells whose solution is nearly singular
-cost a hundred times more on top.  Moving between face-adjacent cells costs
-their distance times the mean cost of the two.
+A move between face-adjacent cells costs its length times the mean cost of
+the two cells.  A cell costs 1, so paths are as short as the cells allow,
+unless its solution is closer to singular than the requested ``clearance``
+(its normalised |det Jx|): then it costs a hundred times more, so a path
+passes there only where nothing else leads on, as next to a cusp or through
+a narrow gate.  The paper's cost, ``1 + clearance_weight / d`` with ``d`` the
+distance in cells to the nearest cell outside the patch (singular edge,
+gate, other region or grid edge alike; Euclidean on uniform grids, along
+faces on adaptive ones), is there too: a positive ``clearance_weight`` keeps
+paths clear of every boundary until they must cross the planned gate, at
+the price of longer paths.
 
 Rather than planning patch by patch to a chosen gate cell, the patches of a
-global path are stacked as layers of one directed graph: edges inside a layer
-are the patch's own continuation links, and the only edges between layers are
-the faces of the planned gate from layer k to layer k + 1.  One shortest-path
-search (Dijkstra, i.e. A* with a zero heuristic, in ``scipy.sparse.csgraph``)
-from the start cell to the goal cell of the last layer then gives the best
-stitched path: it crosses exactly the gates of the global path, in order, and
-never a singular boundary or another gate, because no other edge exists.
+global path are the layers of one search: the nodes are the patches'
+solutions, joined by their continuation links, and the search
+(:func:`~rpr3_gwr_core.planning.astar.layered_astar`) stays in a layer or
+steps to the next one across a face of the planned gate.  One least-cost
+search from the start cell to the goal cell of the last layer then gives the
+best stitched path: it crosses exactly the gates of the global path, in
+order, and never a singular boundary or another gate.  The node graph of the
+whole roadmap is built once, when the planner is made.
 """
 
 from dataclasses import dataclass
+import math
+import threading
 
 import numpy as np
-import scipy.sparse as sparse
-from scipy.sparse.csgraph import dijkstra
 
+from .astar import adjacency, layered_astar
 from ..exceptions import InfeasiblePathError, InvalidInputError
 
 __all__ = ["LocalPlanner", "LocalPath", "DEFAULT_CLEARANCE_WEIGHT"]
 
-DEFAULT_CLEARANCE_WEIGHT = 10.0
+DEFAULT_CLEARANCE_WEIGHT = 0.0
 _LOW_MARGIN_FACTOR = 100.0
 _UNRESOLVED_DEPTH = 0.5
 
@@ -56,84 +62,92 @@ class LocalPath:
     cost: float
 
 
-@dataclass(frozen=True)
-class _Profile:
-    cells: np.ndarray       # sorted flat cells of the patch
-    slots: np.ndarray       # solution slot of each
-    cost: np.ndarray        # clearance cost of each
-    lower: np.ndarray       # local indices of linked face pairs
-    upper: np.ndarray
-    weight: np.ndarray
-
-    def local(self, cells):
-        return np.searchsorted(self.cells, cells)
-
-
 class LocalPlanner:
-    """Cost-weighted planning on the profiles of a roadmap's patches (cells of
-    any dimension).
+    """Cost-weighted planning on the node graph of a roadmap's patches (cells
+    of any dimension).
 
     Parameters
     ----------
     roadmap : Roadmap
-    clearance_weight : float
-        ``w`` of the cell cost ``1 + w / d``; 0 gives shortest paths.
-    low_margin : float
-        Cells whose solution's normalised |det Jx| is below this cost
-        ``_LOW_MARGIN_FACTOR`` times more.
     """
 
-    def __init__(self, roadmap, clearance_weight=DEFAULT_CLEARANCE_WEIGHT, low_margin=0.0):
-        if not np.isfinite(clearance_weight) or clearance_weight < 0:
-            raise InvalidInputError("clearance_weight must be finite and non-negative")
-        self.segmentation = roadmap.segmentation
-        self.clearance_weight = float(clearance_weight)
-        self.low_margin = float(low_margin)
-        self._profiles = {}
-        self._links, self._face_keys, self._face_lengths = self._links_by_patch()
+    def __init__(self, roadmap):
+        seg = self.segmentation = roadmap.segmentation
+        self._pids = np.array(sorted(seg.patches), dtype=np.int64)
+        patches = [seg.patches[pid] for pid in self._pids.tolist()]
+        sizes = [p.cells.size for p in patches]
+        self._offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        n_nodes = int(self._offsets[-1])
+        self._node_cell = np.concatenate([p.cells for p in patches] + [np.zeros(0, np.int64)])
+        self._node_slot = np.concatenate([p.slots for p in patches] + [np.zeros(0, np.int64)])
+        self._node_patch = np.repeat(np.arange(len(patches), dtype=np.int32), sizes)
+        self._indptr, self._indices = adjacency(n_nodes, *self._edges(patches))
+        self._coords = np.ascontiguousarray(seg.field.grid.coordinates(), dtype=np.float64)
+        self._node_margin = np.abs(seg.field.margin[self._node_cell, self._node_slot])
+        # Per clearance weight, costs are filled patch by patch on first use
+        # (the clearance of a large 3-D patch takes a while).
+        self._node_cost = {}
+        self._cost_floor = {}
+        self._lock = threading.Lock()
+        self._g = np.full(n_nodes, np.inf)
+        self._pred = np.empty(n_nodes, np.int64)
+        self._closed = np.zeros(n_nodes, np.uint8)
+        self._touched = np.empty(n_nodes, np.int64)
 
-    def _links_by_patch(self):
-        """Per patch, the (lower, upper) cells of its continuation links and
-        their lengths; and the lengths of the gates' faces, by face key
-        ``lower * n_cells + upper``."""
+    def _edges(self, patches):
+        """The node pairs of every continuation link between two patch
+        solutions, within a patch or across a gate."""
         seg = self.segmentation
-        n_cells = seg.field.grid.size
-        found = {}
-        face_keys, face_lengths = [np.zeros(0, np.int64)], [np.zeros(0)]
-        for (lower, upper, match), lengths in zip(seg.links, seg.field.grid.pair_lengths()):
+        node_of = np.full(seg.patch.shape, -1, dtype=np.int32)
+        for p, offset in zip(patches, self._offsets.tolist()):
+            node_of[p.cells, p.slots] = np.arange(offset, offset + p.cells.size, dtype=np.int32)
+        a_all, b_all = [np.zeros(0, np.int32)], [np.zeros(0, np.int32)]
+        for lower, upper, match in seg.links:
             rows, slots = np.nonzero(match >= 0)
-            a = seg.patch[lower[rows], slots]
-            b = seg.patch[upper[rows], match[rows, slots].astype(np.int64)]
-            gate = (a != b) & (a > 0) & (b > 0)
-            face_keys.append(lower[rows][gate] * n_cells + upper[rows][gate])
-            face_lengths.append(lengths[rows][gate])
-            keep = (a == b) & (a > 0)
-            pids, lo, up, length = a[keep], lower[rows][keep], upper[rows][keep], \
-                lengths[rows][keep]
-            order = np.argsort(pids, kind="stable")
-            pids, lo, up, length = pids[order], lo[order], up[order], length[order]
-            bounds = np.flatnonzero(np.diff(pids)) + 1
-            for chunk in zip(np.split(pids, bounds), np.split(lo, bounds), np.split(up, bounds),
-                             np.split(length, bounds)):
-                if chunk[0].size:
-                    found.setdefault(int(chunk[0][0]), []).append(chunk[1:])
-        links = {pid: tuple(np.concatenate([link[k] for link in v]) for k in range(3))
-                 for pid, v in found.items()}
-        face_keys, face_lengths = np.concatenate(face_keys), np.concatenate(face_lengths)
-        order = np.argsort(face_keys)
-        return links, face_keys[order], face_lengths[order]
+            a = node_of[lower[rows], slots]
+            b = node_of[upper[rows], match[rows, slots].astype(np.int64)]
+            keep = (a >= 0) & (b >= 0)
+            a_all.append(a[keep])
+            b_all.append(b[keep])
+        return np.concatenate(a_all), np.concatenate(b_all)
 
-    def _face_length(self, cells_a, cells_b):
-        """Length of gate faces given by their two cells [joint unit]."""
-        n_cells = self.segmentation.field.grid.size
-        keys = np.minimum(cells_a, cells_b) * n_cells + np.maximum(cells_a, cells_b)
-        return self._face_lengths[np.searchsorted(self._face_keys, keys)]
+    def _costed(self, weight, k):
+        """The node costs for a clearance weight, with those of the patch at
+        index ``k`` filled; and that patch's smallest."""
+        if weight not in self._node_cost:
+            self._node_cost[weight] = np.ones(self._node_cell.size)
+        costs = self._node_cost[weight]
+        pid = int(self._pids[k])
+        if (weight, pid) not in self._cost_floor:
+            cost = 1.0
+            if weight > 0:
+                cost = 1.0 + weight / self.clearance(pid)
+                costs[self._offsets[k]:self._offsets[k + 1]] = cost
+            self._cost_floor[weight, pid] = float(np.min(cost))
+        return costs, self._cost_floor[weight, pid]
 
-    def profile(self, pid):
-        """The patch's cells, clearance costs and weighted links (cached)."""
-        if pid not in self._profiles:
-            self._profiles[pid] = self._build_profile(pid)
-        return self._profiles[pid]
+    def cells_around(self, point, radius):
+        """Cells within ``radius`` grid steps of a point along every axis.
+
+        Parameters
+        ----------
+        point : ndarray, shape (d,)
+            Coordinates on the grid's axes [joint unit].
+        radius : float
+
+        Returns
+        -------
+        ndarray of int
+        """
+        steps = np.array(self.segmentation.field.grid.steps)
+        return np.flatnonzero(np.max(np.abs(self._coords - point) / steps, axis=1) <= radius)
+
+    def _node(self, k, cell, which):
+        cells = self.segmentation.patches[int(self._pids[k])].cells
+        local = int(np.searchsorted(cells, cell))
+        if local >= cells.size or cells[local] != cell:
+            raise InvalidInputError(f"{which} cell {cell} is not in its patch")
+        return int(self._offsets[k]) + local
 
     def clearance(self, pid):
         """Distance of each cell of a patch to its nearest outside cell [cells].
@@ -149,32 +163,26 @@ class LocalPlanner:
         depth[own] = seg.field.grid.depth(patch.cells[own])
         return depth
 
-    def _build_profile(self, pid):
-        patch = self.segmentation.patches[pid]
-        cost = 1.0 + self.clearance_weight / self.clearance(pid)
-        # Cells whose solution is nearly singular (next to a cusp, say) cost
-        # far more, so a path crosses them only where nothing else leads on.
-        margin = np.abs(self.segmentation.field.margin[patch.cells, patch.slots])
-        cost = np.where(margin < self.low_margin, cost * _LOW_MARGIN_FACTOR, cost)
-        lower, upper, length = self._links.get(pid, (np.zeros(0, int), np.zeros(0, int),
-                                                     np.zeros(0)))
-        lower, upper = np.searchsorted(patch.cells, lower), np.searchsorted(patch.cells, upper)
-        weight = 0.5 * length * (cost[lower] + cost[upper])
-        return _Profile(cells=patch.cells, slots=patch.slots, cost=cost, lower=lower,
-                        upper=upper, weight=weight)
-
-    def plan(self, patches, start_cell, goal_cell, blocked=()):
+    def plan(self, patches, start_cell, goal_cell, blocked=(), clearance=0.0,
+             clearance_weight=DEFAULT_CLEARANCE_WEIGHT):
         """Best cell path from a start cell to a goal cell through given patches.
 
         Parameters
         ----------
         patches : sequence of int
-            A global path: patch ids, consecutive ones joined by a gate.
+            A global path: distinct patch ids, consecutive ones joined by a
+            gate.
         start_cell, goal_cell : int
             Flat cells of the first and the last patch.
-        blocked : collection of (int, int)
-            Cell pairs not to move between (either way), such as a step the
-            validator refused.
+        blocked : collection of int
+            Cells not to enter, such as those around a step the validator
+            refused (the start cell is left anyway).
+        clearance : float
+            Cells whose solution's margin is below this cost
+            ``_LOW_MARGIN_FACTOR`` times more.
+        clearance_weight : float
+            ``w`` of the paper's cell cost ``1 + w / d``; 0 gives shortest
+            paths.
 
         Returns
         -------
@@ -183,62 +191,38 @@ class LocalPlanner:
         Raises
         ------
         InvalidInputError
-            If the cells are not in the end patches or two consecutive patches
-            share no gate.
+            If a patch is not in the roadmap or repeats, the cells are not in
+            the end patches, two consecutive patches share no gate, or the
+            weight is negative.
         InfeasiblePathError
-            If no path exists (a patch's profile is cut between its gates).
+            If no path exists (a patch's solutions are cut between its gates).
         """
         seg = self.segmentation
-        profiles = [self.profile(pid) for pid in patches]
-        for cell, profile, which in ((start_cell, profiles[0], "start"),
-                                     (goal_cell, profiles[-1], "goal")):
-            k = profile.local(cell)
-            if k >= profile.cells.size or profile.cells[k] != cell:
-                raise InvalidInputError(f"{which} cell {cell} is not in its patch")
-        offsets = np.cumsum([0] + [p.cells.size for p in profiles])
-        n_cells = seg.field.grid.size
-        refused = np.array([min(a, b) * n_cells + max(a, b) for a, b in blocked], dtype=np.int64)
-        rows, cols, weights = [], [], []
-        for k, profile in enumerate(profiles):
-            lower, upper, weight = profile.lower, profile.upper, profile.weight
-            if refused.size:
-                a, b = profile.cells[lower], profile.cells[upper]
-                keep = ~np.isin(np.minimum(a, b) * n_cells + np.maximum(a, b), refused)
-                lower, upper, weight = lower[keep], upper[keep], weight[keep]
-            rows += [lower + offsets[k], upper + offsets[k]]
-            cols += [upper + offsets[k], lower + offsets[k]]
-            weights += [weight, weight]
-        for k, (a, b) in enumerate(zip(patches, patches[1:])):
-            gate = seg.gates.get((min(a, b), max(a, b)))
-            if gate is None:
+        if not (math.isfinite(clearance_weight) and clearance_weight >= 0):
+            raise InvalidInputError("clearance_weight must be finite and non-negative")
+        patches = [int(pid) for pid in patches]
+        index = np.searchsorted(self._pids, patches)
+        if (not patches or np.any(index >= self._pids.size)
+                or np.any(self._pids[np.minimum(index, self._pids.size - 1)] != patches)
+                or len(set(patches)) != len(patches)):
+            raise InvalidInputError(f"patches {patches} are not distinct patches of the roadmap")
+        for a, b in zip(patches, patches[1:]):
+            if (min(a, b), max(a, b)) not in seg.gates:
                 raise InvalidInputError(f"patches {a} and {b} share no gate")
-            cells_a, cells_b = (gate.faces[:, 0], gate.faces[:, 1]) if a < b else (
-                gate.faces[:, 1], gate.faces[:, 0])
-            la, lb = profiles[k].local(cells_a), profiles[k + 1].local(cells_b)
-            rows.append(la + offsets[k])
-            cols.append(lb + offsets[k + 1])
-            weights.append(0.5 * self._face_length(cells_a, cells_b)
-                           * (profiles[k].cost[la] + profiles[k + 1].cost[lb]))
-        n = int(offsets[-1])
-        graph = sparse.csr_matrix((np.concatenate(weights),
-                                   (np.concatenate(rows), np.concatenate(cols))),
-                                  shape=(n, n))
-        source = int(profiles[0].local(start_cell))
-        target = int(offsets[-2] + profiles[-1].local(goal_cell))
-        distance, predecessor = dijkstra(graph, directed=True, indices=source,
-                                         return_predecessors=True)
-        if not np.isfinite(distance[target]):
-            raise InfeasiblePathError(f"no local path through patches {list(patches)}")
-        nodes = [target]
-        while nodes[-1] != source:
-            nodes.append(int(predecessor[nodes[-1]]))
-        nodes = np.array(nodes[::-1])
-        layer = np.searchsorted(offsets, nodes, side="right") - 1
-        cells = np.empty(nodes.size, dtype=np.int64)
-        slots = np.empty(nodes.size, dtype=np.int64)
-        for k, profile in enumerate(profiles):
-            here = layer == k
-            cells[here] = profile.cells[nodes[here] - offsets[k]]
-            slots[here] = profile.slots[nodes[here] - offsets[k]]
-        return LocalPath(cells=cells, patches=np.asarray(patches)[layer], slots=slots,
-                         cost=float(distance[target]))
+        source = self._node(index[0], start_cell, "start")
+        target = self._node(index[-1], goal_cell, "goal")
+        layer = np.full(self._pids.size, -1, dtype=np.int32)
+        layer[index] = np.arange(len(patches), dtype=np.int32)
+        blocked = np.array(sorted(blocked), dtype=np.int64)
+        with self._lock:
+            costed = [self._costed(float(clearance_weight), k) for k in index.tolist()]
+            nodes, cost = layered_astar(
+                self._indptr, self._indices, self._node_cell, self._node_patch,
+                costed[0][0], self._node_margin, float(clearance), _LOW_MARGIN_FACTOR,
+                self._coords, layer, source, target, blocked, min(f for _, f in costed),
+                self._g, self._pred, self._closed, self._touched)
+        if nodes.size == 0:
+            raise InfeasiblePathError(f"no local path through patches {patches}")
+        return LocalPath(cells=self._node_cell[nodes],
+                         patches=self._pids[self._node_patch[nodes]],
+                         slots=self._node_slot[nodes], cost=float(cost))

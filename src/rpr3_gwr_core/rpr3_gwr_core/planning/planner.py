@@ -1,10 +1,14 @@
-"""The hierarchical planner: locate, global path, local path, smoothing,
-timing and validation, for one roadmap.
+"""The hierarchical planner: locate, global path, local path, shortcutting,
+smoothing, timing and validation, for one roadmap.
 
 A :class:`Planner` precomputes the lookups of its roadmap once; each
-:meth:`Planner.plan` call then answers one request.  Every plan returned has
-passed :func:`~rpr3_gwr_core.validation.validate_path`; a plan that fails it
-is tried along the next global path, and is an error when none passes.
+:meth:`Planner.plan` call then answers one request.  The local planner's
+cell path runs from face to face, so it is first shortcut to straight
+segments inside each patch, which makes it close to the shortest path that
+keeps the requested clearance.  Every plan returned has passed
+:func:`~rpr3_gwr_core.validation.validate_path`; when the shortcut path fails
+it, the cell path is tried, then the next global path, and the plan is an
+error when none passes.
 """
 
 from dataclasses import dataclass, field as dataclass_field
@@ -17,16 +21,24 @@ from ..exceptions import InfeasiblePathError, InvalidInputError, ValidationError
 from .global_planning import RoadmapIndex, feasibility, global_paths, longer_paths
 from .local_planning import DEFAULT_CLEARANCE_WEIGHT, LocalPlanner
 from .locate import DEFAULT_MODE_TOL, locate
-from .trajectory import chaikin, shortcut, time_parameterize
+from .trajectory import cut_corners, shortcut, time_parameterize
 from .validation import DEFAULT_MAX_STEP, DEFAULT_MIN_MARGIN, validate_path
 
 __all__ = ["PlanOptions", "Plan", "Planner"]
 
-# Smoothing keeps this many cells between the path and any patch boundary.
-_SMOOTH_CLEARANCE = 3.0
+# Margin [normalised |det Jx|] that paths keep from the singular locus
+# wherever the roadmap allows.
+DEFAULT_CLEARANCE = 2e-2
+# Shortcuts are checked at this many points per grid step.
 _SAMPLES_PER_CELL = 5
-# Local re-plans around steps the validator refused, per global path.
+# Local re-plans around steps the validator refused, per global path and weight.
 _REPAIRS = 4
+# Shortcuts the validator refused that are put back one by one before the
+# whole cell path is.
+_RESTORED_SHORTCUTS = 3
+# The paper's clearance weight (1 + w / d per cell), for paths that keep to
+# the middle of their patches when the shortest ones cannot be repaired.
+_DETOUR_WEIGHT = 10.0
 # Global paths tried, the listed ones included, before a plan fails: when
 # every shortest path fails locally, longer ones may still pass.
 _MAX_GLOBAL_ATTEMPTS = 16
@@ -39,7 +51,7 @@ class PlanOptions:
     Attributes
     ----------
     smooth : bool
-        Shortcut and round the path (kept only if it validates).
+        Round the path's corners (kept only if it validates).
     weighted : bool
         Rank global paths by weighted cost instead of fewest gates.
     feasibility_only : bool
@@ -52,6 +64,10 @@ class PlanOptions:
         orientation [rad]).
     max_paths : int
         Most global paths reported.
+    clearance : float
+        Margin (normalised |det Jx|) the path keeps from the singular locus
+        wherever the roadmap allows; it passes closer (down to the planner's
+        ``min_margin``) only where nothing else leads on.
     """
 
     smooth: bool = False
@@ -61,6 +77,7 @@ class PlanOptions:
     max_acceleration: float = None
     mode_tol: float = DEFAULT_MODE_TOL
     max_paths: int = 8
+    clearance: float = DEFAULT_CLEARANCE
 
     def __post_init__(self):
         limits = (self.max_velocity, self.max_acceleration)
@@ -75,6 +92,8 @@ class PlanOptions:
             raise InvalidInputError(f"mode_tol must be positive, got {self.mode_tol}")
         if int(self.max_paths) < 1:
             raise InvalidInputError("max_paths must be at least 1")
+        if not (math.isfinite(self.clearance) and 0 <= self.clearance < 1):
+            raise InvalidInputError(f"clearance must lie in [0, 1), got {self.clearance}")
 
 
 @dataclass(frozen=True)
@@ -101,7 +120,7 @@ class Plan:
         Time parameterisation [s, joint unit / s, joint unit / s**2].
     validation : Validation or None
     smoothed : bool
-        Whether the smoothed path was kept.
+        Whether the rounded path was kept.
     """
 
     feasible: bool
@@ -149,7 +168,8 @@ class Planner:
     ----------
     roadmap : Roadmap
     clearance_weight : float
-        Local planner's boundary cost weight.
+        The paper's boundary cost weight of the local planner (0: shortest
+        paths).
     min_margin : float
         Smallest normalised |det Jx| accepted at start, goal and along a plan.
     max_step : float
@@ -159,9 +179,11 @@ class Planner:
     def __init__(self, roadmap, clearance_weight=DEFAULT_CLEARANCE_WEIGHT,
                  min_margin=DEFAULT_MIN_MARGIN, max_step=DEFAULT_MAX_STEP):
         self.roadmap = roadmap
+        if not (math.isfinite(clearance_weight) and clearance_weight >= 0):
+            raise InvalidInputError("clearance_weight must be finite and non-negative")
         self.index = RoadmapIndex(roadmap)
-        # Plans must keep min_margin; cells within thrice that are avoided.
-        self.local = LocalPlanner(roadmap, clearance_weight, low_margin=3 * min_margin)
+        self.local = LocalPlanner(roadmap)
+        self.clearance_weight = float(clearance_weight)
         self.min_margin = float(min_margin)
         self.max_step = float(max_step)
         self._joints = roadmap.grid.joints()
@@ -213,7 +235,7 @@ class Planner:
         failures = []
         for k, path in enumerate(self._attempts(paths, s.patch, g.patch)):
             try:
-                result, joints, patches, local = self._validated_path(path, s, g)
+                result, joints, patches = self._validated_path(path, s, g, options.clearance)
             except InfeasiblePathError as exc:
                 failures.append(f"path {list(path.patches)}: {exc}")
                 continue
@@ -222,11 +244,12 @@ class Planner:
                 continue
             smoothed = False
             if options.smooth and len(joints) > 2:
-                joints_s, patches_s = self._smooth(joints, patches, local)
-                result_s = validate_path(self.roadmap.mechanism, joints_s, s.pose, g.pose,
-                                         self.min_margin, self.max_step)
-                if result_s.ok:
-                    joints, patches, result, smoothed = joints_s, patches_s, result_s, True
+                rounded = self._round(joints, patches, s, g, options.clearance,
+                                      min(result.min_margin,
+                                          self._kept_margin(s, g, options.clearance)))
+                if rounded is not None:
+                    result, joints, patches = rounded
+                    smoothed = True
             timing = (None, None, None)
             if options.max_velocity is not None:
                 timing = time_parameterize(joints, options.max_velocity, options.max_acceleration)
@@ -248,24 +271,85 @@ class Planner:
             paths.append(path)
             yield path
 
-    def _validated_path(self, path, s, g):
-        """Local path along a global path that passes the validator.
-
-        Between two cell centres a sheet can pass right by a cusp point, where
-        the validator refuses the step although both cells are fine; that
-        step is then blocked and the local path planned again, a few times.
-        """
-        blocked = set()
-        for _ in range(_REPAIRS + 1):
-            local = self.local.plan(path.patches, s.cell, g.cell, blocked)
-            joints, patches, cells = self._waypoints(s, g, local)
-            result = validate_path(self.roadmap.mechanism, joints, s.pose, g.pose,
-                                   self.min_margin, self.max_step)
-            k = result.failed_segment
-            if result.ok or k < 1 or min(cells[k - 1], cells[k]) < 0:
+    def _validated_path(self, path, s, g, clearance):
+        """Local path along a global path that passes the validator, shortcut
+        where the shortcut path passes too; when every repair of the
+        shortest path fails, the same for the path the paper's clearance
+        weight keeps in the middle of its patches."""
+        for weight in dict.fromkeys((self.clearance_weight, _DETOUR_WEIGHT)):
+            result, joints, patches = self._repaired_path(path, s, g, clearance, weight)
+            if result.ok:
                 break
-            blocked.add((int(cells[k - 1]), int(cells[k])))
-        return result, joints, patches, local
+        return result, joints, patches
+
+    def _repaired_path(self, path, s, g, clearance, weight):
+        """Local path along a global path, repaired where the validator refuses it.
+
+        The path's cells keep the clearance where they can, but between two
+        cell centres next to a cusp point, or over a singular sliver thinner
+        than a cell, the sheet can dip far lower, even below ``min_margin``.
+        The path must therefore keep half the clearance (or what the start
+        and goal allow) in the validator; where it does not, the cells
+        around the step where it dipped are blocked, in a box growing with
+        each repair, and the local path planned again, a few times, before a
+        path that keeps ``min_margin`` will do.
+        """
+        keep = self._kept_margin(s, g, clearance)
+        blocked = set()
+        tried = []
+        free = list(self.roadmap.grid.axis_joints)
+        for repair in range(_REPAIRS + 1):
+            try:
+                local = self.local.plan(path.patches, s.cell, g.cell, blocked, clearance, weight)
+            except InfeasiblePathError:
+                if not blocked:
+                    raise
+                break  # the blocked cells cut the patches
+            joints, patches, cells = self._waypoints(s, g, local)
+            tried.append((joints, patches))
+            result, kept = self._shortcut_validated(joints, patches, s, g, clearance, keep)
+            if result.ok:
+                return result, joints[kept], patches[kept]
+            k = result.failed_segment
+            if k < 1:
+                break
+            a, b = kept[k - 1], kept[k]
+            middle = 0.5 * (joints[a, free] + joints[b, free])
+            around = self.local.cells_around(middle, 0.5 + repair).tolist()
+            blocked.update(set(around + [cells[a], cells[b]]) - {s.cell, g.cell, -1})
+        # Blocking steps can also lead somewhere worse: the last path, else
+        # the first, if it keeps min_margin.
+        for joints, patches in (tried[-1], tried[0])[:len(tried)]:
+            result = self._validate(joints, s, g, self.min_margin)
+            if result.ok:
+                break
+        return result, joints, patches
+
+    def _shortcut_validated(self, joints, patches, s, g, clearance, keep):
+        """The shortcut path's validation and kept waypoints; a shortcut the
+        validator refuses is put back to the cell path's waypoints it
+        replaced, a few times, then all of them.  A failure is then one of
+        the cell path's own steps."""
+        kept = np.arange(len(joints))
+        if len(joints) > 2:
+            kept = self._shortcut(joints, patches, clearance)
+        for attempt in range(_RESTORED_SHORTCUTS + 2):
+            result = self._validate(joints[kept], s, g, keep)
+            k = result.failed_segment
+            if result.ok or k < 1 or kept[k] - kept[k - 1] == 1:
+                break
+            restored = np.arange(kept[k - 1] + 1, kept[k])
+            if attempt == _RESTORED_SHORTCUTS:
+                restored, k = np.setdiff1d(np.arange(len(joints)), kept), 0
+            kept = np.union1d(kept, restored)
+        return result, kept
+
+    def _kept_margin(self, s, g, clearance):
+        return max(self.min_margin, min(0.5 * clearance, abs(s.margin), abs(g.margin)))
+
+    def _validate(self, joints, s, g, min_margin):
+        return validate_path(self.roadmap.mechanism, joints, s.pose, g.pose, min_margin,
+                             self.max_step)
 
     def _waypoints(self, s, g, local):
         """Exact start, the cell centres, exact goal; repeated points dropped.
@@ -279,64 +363,69 @@ class Planner:
         keep[1:] = np.any(np.abs(np.diff(joints, axis=0)) > 1e-12, axis=1)
         return joints[keep], patches[keep], cells[keep]
 
-    def _smooth(self, joints, patches, local):
-        """Shortcut inside each patch, then round the corners.
+    def _floor(self, patches, cells, clearance):
+        """Margin a straight segment must keep over a stretch of the path: the
+        clearance, or less where the stretch itself passes closer.  The exact
+        start and goal may lie in a cell without their patch's solution; the
+        validator checks the margin there."""
+        margin = self._patch_margin(patches, cells)
+        return min(clearance, float(margin[margin > 0].min(initial=clearance)))
 
-        A shortcut or a rounded corner must keep ``_SMOOTH_CLEARANCE`` cells from
-        the patch boundary and must not pass over a cell whose solution is
-        closer to singular than the worst cell of the stretch it replaces.
-        """
+    def _patch_margin(self, patches, cells):
+        """Margin magnitude of the given patches' solutions at cells, 0 where
+        the patch has none."""
         seg = self.roadmap.segmentation
-        grid = seg.field.grid
-        clearance = {pid: self.local.clearance(pid) for pid in np.unique(patches)}
-        cells_of = {pid: seg.patches[pid].cells for pid in clearance}
+        member = seg.patch[cells] == np.asarray(patches)[:, None]
+        slots = np.argmax(member, axis=1)
+        return np.where(member.any(axis=1), np.abs(seg.field.margin[cells, slots]), 0.0)
 
-        def depth(pid, cells):
-            k = np.searchsorted(cells_of[pid], cells)
-            k = np.minimum(k, cells_of[pid].size - 1)
-            inside = cells_of[pid][k] == cells
-            return np.where(inside, clearance[pid][k], 0.0)
-
-        def patch_margin(pid, cells):
-            member = seg.patch[cells] == pid
-            slots = np.argmax(member, axis=1)
-            return np.where(member.any(axis=1), np.abs(seg.field.margin[cells, slots]), 0.0)
-
+    def _straight(self, a, b, pid, floor):
+        """Whether the straight joint segment from ``a`` to ``b`` stays on
+        patch ``pid`` with margins of at least ``floor`` (sampled)."""
+        grid = self.roadmap.grid
         free = list(grid.axis_joints)
-        path_cells = grid.cells_of(joints[:, free])
-        path_margin = np.array([patch_margin(pid, np.array([c]))[0]
-                                for pid, c in zip(patches, path_cells)])
+        span = np.max(np.abs(b[free] - a[free])) / grid.step
+        t = np.linspace(0.0, 1.0, max(2, int(span * _SAMPLES_PER_CELL) + 1))
+        cells = grid.cells_of(a[free] * (1 - t)[:, None] + b[free] * t[:, None])
+        if np.any(cells < 0):
+            return False
+        return bool(np.all(self._patch_margin(np.full(t.size, pid), cells) >= floor))
 
-        def clear(a, b, pid, floor):
-            span = np.max(np.abs(b[free] - a[free])) / grid.step
-            t = np.linspace(0.0, 1.0, max(2, int(span * _SAMPLES_PER_CELL)))
-            points = a[free] * (1 - t)[:, None] + b[free] * t[:, None]
-            cells = grid.cells_of(points)
-            if np.any(cells < 0):
-                return False
-            # Full clearance along the segment; near its ends, which are
-            # already on the path, being inside the patch is enough.
-            from_ends = np.minimum(t, 1 - t) * span
-            need = np.where(from_ends < 1.5, 1.0, _SMOOTH_CLEARANCE)
-            return bool(np.all(depth(pid, cells) >= need)
-                        and np.all(patch_margin(pid, cells) >= floor))
+    def _shortcut(self, joints, patches, clearance):
+        """Indices of the waypoints kept when each patch's stretch is shortcut
+        by straight segments (gate crossings stay in place)."""
+        cells = self.roadmap.grid.cells_of(joints[:, list(self.roadmap.grid.axis_joints)])
 
         def allowed(i, j):
-            return bool(np.all(patches[i:j + 1] == patches[i])) and clear(
-                joints[i], joints[j], patches[i], path_margin[i:j + 1].min())
+            return bool(np.all(patches[i:j + 1] == patches[i])) and self._straight(
+                joints[i], joints[j], patches[i],
+                self._floor(patches[i:j + 1], cells[i:j + 1], clearance))
 
-        keep = shortcut(joints[:, free], allowed)
-        joints_k, patches_k = joints[keep], patches[keep]
-        # Round each patch's stretch separately so gate crossings stay in
-        # place, and only where the rounded corners keep their clearance.
-        pieces, owners = [], []
-        bounds = np.flatnonzero(np.diff(patches_k)) + 1
-        floors = np.minimum.reduceat(path_margin[keep], np.concatenate([[0], bounds]))
-        for piece, owner, floor in zip(np.split(joints_k, bounds), np.split(patches_k, bounds),
-                                       floors):
-            rounded = chaikin(piece)
-            if not all(clear(a, b, owner[0], floor) for a, b in zip(rounded, rounded[1:])):
-                rounded = piece
-            pieces.append(rounded)
-            owners.append(np.full(len(rounded), owner[0]))
-        return np.vstack(pieces), np.concatenate(owners)
+        return shortcut(joints, allowed)
+
+    def _round(self, joints, patches, s, g, clearance, keep):
+        """The path with its corners cut (Chaikin) where the cut keeps to the
+        corner's patch and the margin the stretch keeps; corners next to
+        where the validator refuses the cut path are put back, a few times.
+
+        Returns the validation, legs and patches of the rounded path, or
+        None when no corner could be cut."""
+        free = list(self.roadmap.grid.axis_joints)
+        cells = self.roadmap.grid.cells_of(joints[:, free])
+        corners = np.zeros(len(joints), dtype=bool)
+        for i in range(1, len(joints) - 1):
+            if patches[i - 1] == patches[i] == patches[i + 1]:
+                floor = self._floor(patches[i - 1:i + 2], cells[i - 1:i + 2], clearance)
+                cut, _ = cut_corners(joints[i - 1:i + 2], [False, True, False])
+                corners[i] = all(self._straight(a, b, patches[i], floor)
+                                 for a, b in zip(cut, cut[1:]))
+        for _ in range(_RESTORED_SHORTCUTS + 1):
+            if not corners.any():
+                return None
+            rounded, origin = cut_corners(joints, corners)
+            result = self._validate(rounded, s, g, keep)
+            if result.ok:
+                return result, rounded, patches[origin]
+            k = max(result.failed_segment, 1)
+            corners[origin[k - 1]:origin[min(k, len(origin) - 1)] + 1] = False
+        return None

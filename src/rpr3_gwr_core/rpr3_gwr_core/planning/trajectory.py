@@ -1,12 +1,10 @@
 """Turning a cell path into a joint trajectory: smoothing and timing.
 
-Smoothing works in the grid's coordinates of the path (the joints on its
-axes; the others are fixed): shortcutting replaces a stretch of the path by
-a straight segment when every cell that segment passes over (sampled at a
-fifth of a cell) belongs, in order, to the patches of the stretch, and keeps
-``min_clearance`` cells from the patch boundary except within a few cells of
-the stretch's gate crossings; Chaikin corner cutting then rounds the corners.  The caller
-validates the result and falls back to the unsmoothed path if it fails.
+Shortcutting replaces a stretch of a polyline by a straight segment where a
+test of the caller's allows it (the planner's: the segment stays on the
+stretch's patch with the margin it keeps); Chaikin's corner cutting rounds
+chosen corners.  The caller validates the result and puts back what the
+validator refuses.
 
 Timing is a velocity profile along the path's arc length s: the speed
 ``v(s)`` is capped so that no joint moves faster than ``max_velocity``, and
@@ -23,7 +21,7 @@ import numpy as np
 
 from ..exceptions import InvalidInputError
 
-__all__ = ["shortcut", "chaikin", "time_parameterize"]
+__all__ = ["shortcut", "cut_corners", "time_parameterize"]
 
 
 def shortcut(points, allowed, max_passes=3):
@@ -64,28 +62,33 @@ def shortcut(points, allowed, max_passes=3):
     return np.array(keep)
 
 
-def chaikin(points, iterations=2):
-    """Chaikin corner cutting; the end points stay.
+def cut_corners(points, corners):
+    """One step of Chaikin's corner cutting, at chosen corners.
+
+    Each chosen corner is replaced by the points a quarter of the way along
+    its two segments; the end points stay.
 
     Parameters
     ----------
     points : ndarray, shape (n, d)
-    iterations : int
+    corners : ndarray of bool, shape (n,)
+        Which points to cut (the first and last are never cut).
 
     Returns
     -------
-    ndarray, shape (m, d)
+    points : ndarray, shape (m, d)
+    origin : ndarray of int, shape (m,)
+        The point of the input each output point stands for.
     """
     points = np.asarray(points, dtype=float)
-    for _ in range(iterations):
-        if len(points) < 3:
-            return points
-        q = 0.75 * points[:-1] + 0.25 * points[1:]
-        r = 0.25 * points[:-1] + 0.75 * points[1:]
-        inner = np.empty((2 * (len(points) - 1), points.shape[1]))
-        inner[0::2], inner[1::2] = q, r
-        points = np.vstack([points[:1], inner[1:-1], points[-1:]])
-    return points
+    cut = np.asarray(corners, dtype=bool).copy()
+    cut[[0, -1]] = False
+    origin = np.repeat(np.arange(len(points)), np.where(cut, 2, 1))
+    out = points[origin]
+    first = np.flatnonzero(cut[origin] & (np.diff(origin, prepend=-1) > 0))
+    out[first] = 0.75 * points[origin[first]] + 0.25 * points[origin[first] - 1]
+    out[first + 1] = 0.75 * points[origin[first]] + 0.25 * points[origin[first] + 1]
+    return out, origin
 
 
 def time_parameterize(path, max_velocity, max_acceleration):
@@ -140,11 +143,11 @@ def time_parameterize(path, max_velocity, max_acceleration):
     turn = np.max(np.abs(direction[1:] - direction[:-1]), axis=1)
     span = 0.5 * (length[1:] + length[:-1])
     half = 0.5 * max_acceleration
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cap[1:-1] = np.minimum(cap[1:-1], np.sqrt(half * span / turn))
-    cap[0] = cap[-1] = 0.0
-    # Extreme limits overflow or underflow in here; the result is checked below.
+    # Straight corners divide by 0, and extreme limits overflow or underflow
+    # in here; the result is checked below.
     with np.errstate(all="ignore"):
+        cap[1:-1] = np.minimum(cap[1:-1], np.sqrt(half * span / turn))
+        cap[0] = cap[-1] = 0.0
         for _ in range(_MAX_REFINEMENTS):
             speed = _speed_profile(cap, length, half)
             times = _times(speed, length, half)

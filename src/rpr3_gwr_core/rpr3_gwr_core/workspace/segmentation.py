@@ -382,29 +382,29 @@ def _absorb_unresolved(field, region, patch, links):
 
 
 def _describe_patches(field, region, patch, links):
-    n = field.grid.size
-    # Boundary faces as keys pid * n + cell, so one np.unique sorts them by patch.
-    def boundary_keys(src, dst, forward):
+    def boundary_solutions(src, dst, forward):
+        """``(cells, slots)`` of the patch solutions of ``src`` whose face
+        towards ``dst`` is a gate, and of those whose face is singular."""
         rows, slots = np.nonzero(field.valid[src] & (patch[src] > 0))
-        own = patch[src[rows], slots].astype(np.int64)
+        own = patch[src[rows], slots]
         target = forward[rows, slots].astype(np.int64)
         continues = target >= 0
         other = np.where(continues, patch[dst[rows], np.maximum(target, 0)], 0)
         gate = continues & (other > 0) & (other != own)
         singular = ~continues | (other == 0)
-        return own[gate] * n + src[rows][gate], own[singular] * n + src[rows][singular]
+        cells = src[rows]
+        return (cells[gate], slots[gate]), (cells[singular], slots[singular])
 
     sides = [(lo, up, match) for lo, up, match in links] + [
         (up, lo, _inverse(match)) for lo, up, match in links]
     # numpy releases the GIL: the faces' sides are worked on in parallel.
     with ThreadPoolExecutor(max_workers=2) as pool:
-        keys = list(pool.map(lambda side: boundary_keys(*side), sides))
-    gate_keys = np.unique(np.concatenate([np.zeros(0, np.int64)] + [g for g, _ in keys]))
-    singular_keys = np.unique(np.concatenate([np.zeros(0, np.int64)] + [s for _, s in keys]))
-
-    def of_patch(keys, pid):
-        lo, hi = np.searchsorted(keys, [pid * n, (pid + 1) * n])
-        return keys[lo:hi] - pid * n
+        found = list(pool.map(lambda side: boundary_solutions(*side), sides))
+    on_gate = np.zeros(patch.shape, dtype=bool)
+    on_singular = np.zeros(patch.shape, dtype=bool)
+    for gate, singular in found:
+        on_gate[gate] = True
+        on_singular[singular] = True
 
     cells_all, slots_all = np.nonzero(patch)
     ids = patch[cells_all, slots_all]
@@ -426,8 +426,8 @@ def _describe_patches(field, region, patch, links):
         patches[pid] = Patch(
             id=pid, region=own, layer=len(layers[own]), aspect=int(aspects[0]),
             n_solutions=int(field.count[cells[region[cells] == own][0]]), cells=cells,
-            slots=slots, gate_cells=of_patch(gate_keys, pid),
-            singular_cells=of_patch(singular_keys, pid))
+            slots=slots, gate_cells=cells[on_gate[cells, slots]],
+            singular_cells=cells[on_singular[cells, slots]])
     return patches
 
 

@@ -1,0 +1,226 @@
+"""Compiled graph kernels of the local planner: the node graph's adjacency and
+an A* search restricted to the layers of a global path.
+
+Each node is one solution of one cell of a patch.  The search may stay in a
+layer (a patch of the global path) or step to the next layer (across a face
+of the gate to the next patch), never elsewhere, so its path crosses exactly
+the planned gates in order.  Edge weights are not stored: an edge between
+face-adjacent cells costs its length (the cells' coordinate difference, one
+axis) times the mean cost of its two nodes, which keeps a 3-D roadmap's
+adjacency to one index array.
+
+The heuristic is the L1 distance to the goal cell times the smallest node
+cost of the path's patches: every face-to-face move runs along one axis, so
+a path is at least that long and costs at least that much, and the
+heuristic is consistent; A* therefore returns a least-cost path, like
+Dijkstra, after settling only the nodes whose estimate is below its cost.
+Ties are broken towards the deeper node, which on a lattice with many
+equal-cost staircases keeps the search near one of them.
+"""
+
+import numba
+import numpy as np
+
+__all__ = ["adjacency", "layered_astar"]
+
+
+@numba.njit(cache=True)
+def adjacency(n_nodes, a, b):
+    """Symmetric adjacency (CSR) of undirected edges.
+
+    Parameters
+    ----------
+    n_nodes : int
+    a, b : ndarray of int32, shape (n_edges,)
+        The two nodes of each edge.
+
+    Returns
+    -------
+    indptr : ndarray of int64, shape (n_nodes + 1,)
+    indices : ndarray of int32, shape (2 * n_edges,)
+    """
+    indptr = np.zeros(n_nodes + 1, np.int64)
+    for k in range(a.size):
+        indptr[a[k] + 1] += 1
+        indptr[b[k] + 1] += 1
+    for i in range(n_nodes):
+        indptr[i + 1] += indptr[i]
+    fill = indptr[:-1].copy()
+    indices = np.empty(2 * a.size, np.int32)
+    for k in range(a.size):
+        indices[fill[a[k]]] = b[k]
+        fill[a[k]] += 1
+        indices[fill[b[k]]] = a[k]
+        fill[b[k]] += 1
+    return indptr, indices
+
+
+@numba.njit(cache=True)
+def _before(key, tie, i, j):
+    return key[i] < key[j] or (key[i] == key[j] and tie[i] < tie[j])
+
+
+@numba.njit(cache=True)
+def _swap(key, tie, item, i, j):
+    key[i], key[j] = key[j], key[i]
+    tie[i], tie[j] = tie[j], tie[i]
+    item[i], item[j] = item[j], item[i]
+
+
+@numba.njit(cache=True)
+def _sift_up(key, tie, item, i):
+    while i > 0:
+        parent = (i - 1) >> 1
+        if not _before(key, tie, i, parent):
+            break
+        _swap(key, tie, item, i, parent)
+        i = parent
+
+
+@numba.njit(cache=True)
+def _sift_down(key, tie, item, size):
+    i = 0
+    while True:
+        best = 2 * i + 1
+        if best >= size:
+            break
+        if best + 1 < size and _before(key, tie, best + 1, best):
+            best += 1
+        if not _before(key, tie, best, i):
+            break
+        _swap(key, tie, item, i, best)
+        i = best
+
+
+@numba.njit(cache=True)
+def _l1(coords, c, d):
+    total = 0.0
+    for k in range(coords.shape[1]):
+        total += abs(coords[c, k] - coords[d, k])
+    return total
+
+
+@numba.njit(cache=True)
+def _is_blocked(blocked, cell):
+    k = np.searchsorted(blocked, cell)
+    return k < blocked.size and blocked[k] == cell
+
+
+@numba.njit(cache=True)
+def _cost(node_cost, node_margin, clearance, penalty, u):
+    return node_cost[u] * penalty if node_margin[u] < clearance else node_cost[u]
+
+
+@numba.njit(cache=True)
+def layered_astar(indptr, indices, node_cell, node_patch, node_cost, node_margin, clearance,
+                  penalty, coords, layer, source, target, blocked, cost_floor, g, pred, closed,
+                  touched):
+    """Least-cost node path from ``source`` to ``target`` through the layers.
+
+    Parameters
+    ----------
+    indptr, indices : ndarray
+        The node graph (:func:`adjacency`).
+    node_cell : ndarray of int, shape (n_nodes,)
+        Cell of each node.
+    node_patch : ndarray of int32, shape (n_nodes,)
+        Index of each node's patch.
+    node_cost : ndarray of float64, shape (n_nodes,)
+        Cost per unit length of each node (needed on the path's patches).
+    node_margin : ndarray of float64, shape (n_nodes,)
+        Margin magnitude of each node's solution.
+    clearance, penalty : float
+        Nodes with a margin below ``clearance`` cost ``penalty`` times more.
+    coords : ndarray of float64, shape (n_cells, d)
+        Coordinates of the cells [joint unit].
+    layer : ndarray of int32, shape (n_patches,)
+        Position of each patch on the global path, -1 off it.
+    source, target : int
+        Nodes of the start cell (layer 0) and of the goal cell (last layer).
+    blocked : ndarray of int64, shape (k,)
+        Cells not to enter, ascending.
+    cost_floor : float
+        Smallest ``node_cost`` on the path's patches (scales the heuristic).
+    g, pred, closed, touched : ndarray, shape (n_nodes,)
+        Work arrays: ``g`` all infinite and ``closed`` all zero on entry,
+        and so again on return.
+
+    Returns
+    -------
+    nodes : ndarray of int64
+        The path, empty when the target cannot be reached.
+    cost : float
+    """
+    capacity = 1024
+    key = np.empty(capacity)
+    tie = np.empty(capacity)
+    item = np.empty(capacity, np.int64)
+    goal = node_cell[target]
+    g[source] = 0.0
+    pred[source] = -1
+    touched[0] = source
+    n_touched = 1
+    key[0] = cost_floor * _l1(coords, node_cell[source], goal)
+    tie[0] = 0.0
+    item[0] = source
+    size = 1
+    found = False
+    while size > 0:
+        u = item[0]
+        size -= 1
+        if size > 0:
+            key[0], tie[0], item[0] = key[size], tie[size], item[size]
+            _sift_down(key, tie, item, size)
+        if closed[u]:
+            continue
+        closed[u] = 1
+        if u == target:
+            found = True
+            break
+        here = layer[node_patch[u]]
+        cell = node_cell[u]
+        cost_u = _cost(node_cost, node_margin, clearance, penalty, u)
+        for e in range(indptr[u], indptr[u + 1]):
+            v = indices[e]
+            if closed[v]:
+                continue
+            there = layer[node_patch[v]]
+            if there != here and there != here + 1:
+                continue
+            other = node_cell[v]
+            if blocked.size and _is_blocked(blocked, other):
+                continue
+            reach = g[u] + 0.5 * _l1(coords, cell, other) * (
+                cost_u + _cost(node_cost, node_margin, clearance, penalty, v))
+            if reach < g[v]:
+                if g[v] == np.inf:
+                    touched[n_touched] = v
+                    n_touched += 1
+                g[v] = reach
+                pred[v] = u
+                if size == capacity:
+                    capacity *= 2
+                    key = np.concatenate((key, np.empty(size)))
+                    tie = np.concatenate((tie, np.empty(size)))
+                    item = np.concatenate((item, np.empty(size, np.int64)))
+                key[size] = reach + cost_floor * _l1(coords, other, goal)
+                tie[size] = -reach
+                item[size] = v
+                _sift_up(key, tie, item, size)
+                size += 1
+    cost = g[target]
+    count = 0
+    if found:
+        node = target
+        while node >= 0:
+            count += 1
+            node = pred[node]
+    nodes = np.empty(count, np.int64)
+    node = target
+    for k in range(count - 1, -1, -1):
+        nodes[k] = node
+        node = pred[node]
+    for k in range(n_touched):
+        g[touched[k]] = np.inf
+        closed[touched[k]] = 0
+    return nodes, cost
