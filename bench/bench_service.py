@@ -89,6 +89,8 @@ def _stamp(path, pattern):
 
 
 def _summary(times, wall):
+    if not times:
+        return {"requests": 0}
     return {"requests": len(times), "p50_ms": round(1e3 * statistics.median(times), 2),
             "p95_ms": round(1e3 * sorted(times)[int(0.95 * (len(times) - 1))], 2),
             "throughput_per_s": round(len(times) / wall, 1)}
@@ -139,10 +141,14 @@ def main():
         single = [_call(clients[0], _request(k, examples)) for k in range(args.requests)]
         print(json.dumps(dict(_summary(single, time.perf_counter() - begin), clients=1)))
         results = [[] for _ in clients]
+        errors = []
 
         def run(k):
-            results[k] = [_call(clients[k], _request(j + k, examples))
-                          for j in range(args.requests)]
+            for j in range(args.requests):
+                try:
+                    results[k].append(_call(clients[k], _request(j + k, examples)))
+                except (RuntimeError, TimeoutError) as exc:
+                    errors.append(str(exc)[:200])
 
         threads = [threading.Thread(target=run, args=(k,)) for k in range(len(clients))]
         begin = time.perf_counter()
@@ -153,7 +159,8 @@ def main():
         wall = time.perf_counter() - begin
         merged = [t for r in results for t in r]
         print(json.dumps(dict(_summary(merged, wall), clients=len(clients),
-                              failures=len(clients) * args.requests - len(merged))))
+                              failures=len(clients) * args.requests - len(merged),
+                              errors=sorted(set(errors)))))
     finally:
         executor.shutdown(timeout_sec=10.0)
         spinner.join(timeout=10.0)
