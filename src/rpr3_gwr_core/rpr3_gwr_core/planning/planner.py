@@ -363,13 +363,19 @@ class Planner:
         keep[1:] = np.any(np.abs(np.diff(joints, axis=0)) > 1e-12, axis=1)
         return joints[keep], patches[keep], cells[keep]
 
-    def _floor(self, patches, cells, clearance):
-        """Margin a straight segment must keep over a stretch of the path: the
-        clearance, or less where the stretch itself passes closer.  The exact
-        start and goal may lie in a cell without their patch's solution; the
-        validator checks the margin there."""
-        margin = self._patch_margin(patches, cells)
-        return min(clearance, float(margin[margin > 0].min(initial=clearance)))
+    def _waypoint_margins(self, joints, patches):
+        """Margin of each waypoint's patch solution at its cell, 0 where that
+        cell has none (the exact start and goal may lie in such a cell; the
+        validator checks the margin there)."""
+        cells = self.roadmap.grid.cells_of(joints[:, list(self.roadmap.grid.axis_joints)])
+        return self._patch_margin(patches, cells)
+
+    @staticmethod
+    def _floor(margins, clearance):
+        """Margin a straight segment must keep over a stretch of the path
+        (``margins`` of its waypoints): the clearance, or less where the
+        stretch itself passes closer."""
+        return min(clearance, float(margins[margins > 0].min(initial=clearance)))
 
     def _patch_margin(self, patches, cells):
         """Margin magnitude of the given patches' solutions at cells, 0 where
@@ -394,12 +400,11 @@ class Planner:
     def _shortcut(self, joints, patches, clearance):
         """Indices of the waypoints kept when each patch's stretch is shortcut
         by straight segments (gate crossings stay in place)."""
-        cells = self.roadmap.grid.cells_of(joints[:, list(self.roadmap.grid.axis_joints)])
+        margins = self._waypoint_margins(joints, patches)
 
         def allowed(i, j):
             return bool(np.all(patches[i:j + 1] == patches[i])) and self._straight(
-                joints[i], joints[j], patches[i],
-                self._floor(patches[i:j + 1], cells[i:j + 1], clearance))
+                joints[i], joints[j], patches[i], self._floor(margins[i:j + 1], clearance))
 
         return shortcut(joints, allowed)
 
@@ -410,12 +415,11 @@ class Planner:
 
         Returns the validation, legs and patches of the rounded path, or
         None when no corner could be cut."""
-        free = list(self.roadmap.grid.axis_joints)
-        cells = self.roadmap.grid.cells_of(joints[:, free])
+        margins = self._waypoint_margins(joints, patches)
         corners = np.zeros(len(joints), dtype=bool)
         for i in range(1, len(joints) - 1):
             if patches[i - 1] == patches[i] == patches[i + 1]:
-                floor = self._floor(patches[i - 1:i + 2], cells[i - 1:i + 2], clearance)
+                floor = self._floor(margins[i - 1:i + 2], clearance)
                 cut, _ = cut_corners(joints[i - 1:i + 2], [False, True, False])
                 corners[i] = all(self._straight(a, b, patches[i], floor)
                                  for a, b in zip(cut, cut[1:]))
