@@ -182,9 +182,10 @@ class Segmentation:
             raise InvalidInputError("region, patch and link arrays do not fit the field's grid")
         links = [(lo, up, np.asarray(m, dtype=np.int8)) for (lo, up), m in zip(pairs, links)]
         region, patch = region.astype(np.int32), patch.astype(np.int32)
+        linked = _linked_solutions(patch, links)
         return cls(field=field, region=region, patch=patch,
-                   patches=_describe_patches(field, region, patch, links),
-                   gates=_gates(field, patch, links), links=links)
+                   patches=_describe_patches(field, region, patch, links, linked),
+                   gates=_gates(field, patch, linked), links=links)
 
 
 def segment(field, method="components", min_region_cells=8):
@@ -381,30 +382,36 @@ def _absorb_unresolved(field, region, patch, links):
     return out
 
 
-def _describe_patches(field, region, patch, links):
-    def boundary_solutions(src, dst, forward):
-        """``(cells, slots)`` of the patch solutions of ``src`` whose face
-        towards ``dst`` is a gate, and of those whose face is singular."""
-        rows, slots = np.nonzero(field.valid[src] & (patch[src] > 0))
-        own = patch[src[rows], slots]
-        target = forward[rows, slots].astype(np.int64)
-        continues = target >= 0
-        other = np.where(continues, patch[dst[rows], np.maximum(target, 0)], 0)
-        gate = continues & (other > 0) & (other != own)
-        singular = ~continues | (other == 0)
-        cells = src[rows]
-        return (cells[gate], slots[gate]), (cells[singular], slots[singular])
+def _linked_solutions(patch, links):
+    """Per axis, the linked patch solutions of each face: ``(rows, lower,
+    lower_slot, upper, upper_slot)``, ``rows`` indexing the axis's faces."""
+    out = []
+    for lo, up, match in links:
+        rows, slots = np.nonzero(match >= 0)
+        lower, upper = lo[rows], up[rows]
+        target = match[rows, slots].astype(np.int64)
+        into = (patch[lower, slots] > 0) & (patch[upper, target] > 0)
+        out.append((rows[into], lower[into], slots[into], upper[into], target[into]))
+    return out
 
-    sides = [(lo, up, match) for lo, up, match in links] + [
-        (up, lo, _inverse(match)) for lo, up, match in links]
-    # numpy releases the GIL: the faces' sides are worked on in parallel.
-    with ThreadPoolExecutor(max_workers=2) as pool:
-        found = list(pool.map(lambda side: boundary_solutions(*side), sides))
-    on_gate = np.zeros(patch.shape, dtype=bool)
-    on_singular = np.zeros(patch.shape, dtype=bool)
-    for gate, singular in found:
-        on_gate[gate] = True
-        on_singular[singular] = True
+
+def _describe_patches(field, region, patch, links, linked):
+    n, width = patch.shape
+    # A patch solution is on its singular boundary where one of its cell's
+    # faces does not continue it into a patch: it has fewer such links than
+    # its cell has faces.
+    faces = np.zeros(n, dtype=np.int64)
+    continued = np.zeros(n * width, dtype=np.int64)
+    on_gate = np.zeros(n * width, dtype=bool)
+    for (lo, up, _), (_, lower, lower_slot, upper, upper_slot) in zip(links, linked):
+        faces += np.bincount(lo, minlength=n) + np.bincount(up, minlength=n)
+        keys = np.concatenate([lower * width + lower_slot, upper * width + upper_slot])
+        continued += np.bincount(keys, minlength=n * width)
+        crossing = patch[lower, lower_slot] != patch[upper, upper_slot]
+        on_gate[lower[crossing] * width + lower_slot[crossing]] = True
+        on_gate[upper[crossing] * width + upper_slot[crossing]] = True
+    on_singular = field.valid & (patch > 0) & (continued.reshape(n, width) < faces[:, None])
+    on_gate = on_gate.reshape(n, width)
 
     cells_all, slots_all = np.nonzero(patch)
     ids = patch[cells_all, slots_all]
@@ -431,23 +438,12 @@ def _describe_patches(field, region, patch, links):
     return patches
 
 
-def _inverse(match):
-    """Reverse a partial bijection ``match[k, i] = j`` into ``inverse[k, j] = i``."""
-    inverse = np.full_like(match, -1)
-    rows, slots = np.nonzero(match >= 0)
-    inverse[rows, match[rows, slots]] = slots
-    return inverse
-
-
-def _gates(field, patch, links):
+def _gates(field, patch, linked):
     first, second, cells_first, cells_second, measure = [], [], [], [], []
-    for (lo, up, match), measures in zip(links, field.grid.face_measures()):
-        rows, slots = np.nonzero(match >= 0)
-        a = patch[lo[rows], slots]
-        b = patch[up[rows], match[rows, slots].astype(np.int64)]
-        crossing = (a > 0) & (b > 0) & (a != b)
-        a, b = a[crossing], b[crossing]
-        ca, cb = lo[rows][crossing], up[rows][crossing]
+    for measures, (rows, ca, slot_a, cb, slot_b) in zip(field.grid.face_measures(), linked):
+        a, b = patch[ca, slot_a], patch[cb, slot_b]
+        crossing = a != b
+        a, b, ca, cb = a[crossing], b[crossing], ca[crossing], cb[crossing]
         swap = a > b
         first.append(np.where(swap, b, a))
         second.append(np.where(swap, a, b))
