@@ -271,6 +271,6 @@ def test_the_clearance_parameter_sets_the_margin_paths_keep(service):
         assert node.set_parameters([Parameter("clearance", value=0.02)])[0].successful
         response = service.plan(MODE_A, MODE_B)
         assert response.success, response.error_msg
-        assert response.min_singularity_margin >= 0.01
+        assert response.min_singularity_margin >= 0.005
     finally:
         node.set_parameters([Parameter("clearance", value=default)])

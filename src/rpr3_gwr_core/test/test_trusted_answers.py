@@ -138,9 +138,9 @@ def test_a_local_failure_tries_the_next_global_path(paper_roadmap):
 
 
 @pytest.mark.parametrize("clearance", [DEFAULT_CLEARANCE, 2e-2])
-def test_the_mode_change_around_a_cusp_keeps_half_the_clearance(planner, clearance):
+def test_the_mode_change_around_a_cusp_keeps_a_quarter_of_the_clearance(planner, clearance):
     # Its cell path passed 0.1 from the cusp at (32.40, 28.61), where the
     # sheet between two cells of margin 0.012 dips to 0.0019.
     plan = planner.plan((17, 20, 25, D(29.47)), (17, 20, 25, D(96.13)),
                         PlanOptions(clearance=clearance))
-    assert plan.validation.min_margin >= 0.5 * clearance
+    assert plan.validation.min_margin >= 0.25 * clearance

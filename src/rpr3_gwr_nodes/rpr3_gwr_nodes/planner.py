@@ -111,7 +111,7 @@ class PlannerNode(Node):
                         "[length unit/s^2]", floating_point_range=positive))
         self.declare_parameter("clearance", DEFAULT_CLEARANCE, ParameterDescriptor(
             description="Margin (normalised |det Jx|) that paths keep from the singular "
-                        "locus wherever the roadmap allows; they keep half of it in "
+                        "locus wherever the roadmap allows; they keep a quarter of it in "
                         "validation, or what the start and goal allow",
             floating_point_range=[FloatingPointRange(from_value=0.0, to_value=0.5)]))
         self._state = None

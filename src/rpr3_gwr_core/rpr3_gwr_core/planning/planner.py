@@ -288,7 +288,7 @@ class Planner:
         The path's cells keep the clearance where they can, but between two
         cell centres next to a cusp point, or over a singular sliver thinner
         than a cell, the sheet can dip far lower, even below ``min_margin``.
-        The path must therefore keep half the clearance (or what the start
+        The path must therefore keep a quarter of the clearance (or what the start
         and goal allow) in the validator; where it does not, the cells
         around the step where it dipped are blocked, in a box growing with
         each repair, and the local path planned again, a few times, before a
@@ -345,7 +345,7 @@ class Planner:
         return result, kept
 
     def _kept_margin(self, s, g, clearance):
-        return max(self.min_margin, min(0.5 * clearance, abs(s.margin), abs(g.margin)))
+        return max(self.min_margin, min(0.25 * clearance, abs(s.margin), abs(g.margin)))
 
     def _validate(self, joints, s, g, min_margin):
         return validate_path(self.roadmap.mechanism, joints, s.pose, g.pose, min_margin,
