@@ -40,6 +40,8 @@ import functools
 import math
 import numbers
 
+import numba
+from numba.extending import register_jitable
 import numpy as np
 
 from ..exceptions import InvalidInputError
@@ -167,11 +169,17 @@ class Geometry(Mechanism):
         """Base points as an array, shape (3, 2) [length unit]."""
         return np.array([self.a1, self.a2, self.a3])
 
-    @property
+    @functools.cached_property
     def scale(self):
         """Characteristic length (longest platform side) used to make the
         orientation column of the Jacobian commensurable with positions."""
         return max(self.d1, self.d2, self.d3)
+
+    @functools.cached_property
+    def parameters(self):
+        """``(a1x, a1y, a2x, a2y, a3x, a3y, d1, d3, beta)``: the geometry as the
+        constraint equations (and their compiled form) take it."""
+        return (*self.a1, *self.a2, *self.a3, self.d1, self.d3, self.beta)
 
     def to_dict(self):
         """Plain-data form, for JSON, messages and cache keys."""
@@ -327,34 +335,37 @@ def _parallel_jacobian(pose, geometry):
                            np.stack([u3x, u3y, w3], -1)], -2)
 
 
-# The constraint equations are written once, as arithmetic on arrays or on
-# floats: batches (the field, continuity) pass numpy's cos and sin, the
-# sequential continuation of one pose (validator, driver) math's, which is
-# many times faster than numpy on single values.
+# The constraint equations are written once, as arithmetic that runs on numpy
+# arrays for batches (the field, continuity) and, compiled by numba, on floats
+# for the sequential continuation of one pose (validator, driver), where
+# numpy's per-call cost would dominate.
 
 def _rows(pose, geometry):
     """Entries of ``Jx / 2`` of poses ``(..., 3)`` (see :func:`_row_terms`)."""
-    return _row_terms(pose[..., 0], pose[..., 1], pose[..., 2], geometry, np.cos, np.sin)
+    return _row_terms(pose[..., 0], pose[..., 1], pose[..., 2], geometry.parameters)
 
 
-def _row_terms(x, y, alpha, geometry, cos, sin):
+@register_jitable
+def _row_terms(x, y, alpha, parameters):
     """Entries of ``Jx / 2``: legs ``u_i = B_i - A_i`` and ``w_i = u_i . dB_i/dalpha``
     (``w_1 = 0`` because B1 is the platform's reference point)."""
-    (a1x, a1y), (a2x, a2y), (a3x, a3y) = geometry.a1, geometry.a2, geometry.a3
-    c, s = cos(alpha), sin(alpha)
-    c3, s3 = cos(alpha + geometry.beta), sin(alpha + geometry.beta)
+    a1x, a1y, a2x, a2y, a3x, a3y, d1, d3, beta = parameters
+    c, s = np.cos(alpha), np.sin(alpha)
+    c3, s3 = np.cos(alpha + beta), np.sin(alpha + beta)
     u1x, u1y = x - a1x, y - a1y
-    u2x, u2y = x + geometry.d1 * c - a2x, y + geometry.d1 * s - a2y
-    u3x, u3y = x + geometry.d3 * c3 - a3x, y + geometry.d3 * s3 - a3y
-    w2 = geometry.d1 * (c * u2y - s * u2x)
-    w3 = geometry.d3 * (c3 * u3y - s3 * u3x)
+    u2x, u2y = x + d1 * c - a2x, y + d1 * s - a2y
+    u3x, u3y = x + d3 * c3 - a3x, y + d3 * s3 - a3y
+    w2 = d1 * (c * u2y - s * u2x)
+    w3 = d3 * (c3 * u3y - s3 * u3x)
     return u1x, u1y, u2x, u2y, w2, u3x, u3y, w3
 
 
+@register_jitable
 def _det_rows(u1x, u1y, u2x, u2y, w2, u3x, u3y, w3):
     return u1x * (u2y * w3 - w2 * u3y) + u1y * (w2 * u3x - u2x * w3)
 
 
+@register_jitable
 def _adjugate_product(rows, r1, r2, r3):
     """``det(Jx / 2) (Jx / 2)^-1 r`` and ``det(Jx / 2)``."""
     a, b, c, d, e, f, g, h = rows
@@ -371,6 +382,7 @@ def _solve_rows(rows, r1, r2, r3):
     return np.stack([dx * inv, dy * inv, da * inv], axis=-1)
 
 
+@register_jitable
 def _leg_residuals(rows, rho):
     """``|B_i - A_i|**2 - rho_i**2`` from the rows, one per leg."""
     u1x, u1y, u2x, u2y, _, u3x, u3y, _ = rows
@@ -378,14 +390,16 @@ def _leg_residuals(rows, rho):
             u3x * u3x + u3y * u3y - rho[2] * rho[2])
 
 
-def _row_norms(rows, scale, sqrt, hypot):
+@register_jitable
+def _row_norms(rows, scale):
     """Norms of the rows of ``Jx / 2`` with the orientation column over ``scale``."""
     u1x, u1y, u2x, u2y, w2, u3x, u3y, w3 = rows
     w2, w3 = w2 / scale, w3 / scale
-    return (hypot(u1x, u1y), sqrt(u2x * u2x + u2y * u2y + w2 * w2),
-            sqrt(u3x * u3x + u3y * u3y + w3 * w3))
+    return (np.hypot(u1x, u1y), np.sqrt(u2x * u2x + u2y * u2y + w2 * w2),
+            np.sqrt(u3x * u3x + u3y * u3y + w3 * w3))
 
 
+@register_jitable
 def _normalised_det(rows, norms, scale):
     """det of the rows divided by their norms: normalising before the
     determinant keeps tiny legs from underflowing the product of the norms."""
@@ -425,15 +439,12 @@ def singularity_margin(pose, geometry=PAPER_GEOMETRY):
 
 def _singularity_margin(pose, geometry):
     rows = _rows(pose, geometry)
-    norms = _row_norms(rows, geometry.scale, np.sqrt, np.hypot)
+    norms = _row_norms(rows, geometry.scale)
     with np.errstate(invalid="ignore", divide="ignore"):
         margin = _normalised_det(rows, norms, geometry.scale)
     return np.where((norms[0] > 0) & (norms[1] > 0) & (norms[2] > 0), margin, 0.0)
 
 
-def _scalar_margin(rows, scale):
-    norms = _row_norms(rows, scale, math.sqrt, math.hypot)
-    return _normalised_det(rows, norms, scale) if min(norms) > 0 else 0.0
 
 
 def aspect(pose, geometry=PAPER_GEOMETRY):
@@ -494,25 +505,35 @@ _RESIDUAL_TOL = 1e-9
 def _step(geometry, pose, rho_from, rho_to):
     """One predictor-corrector step of one pose (:meth:`Geometry.step`)."""
     x, y, alpha = (float(v) for v in pose)
-    r1, r2, r3 = (float(v) for v in rho_from)
-    target = tuple(float(v) for v in rho_to)
-    t1, t2, t3 = target
-    rows = _row_terms(x, y, alpha, geometry, math.cos, math.sin)
+    ok, x, y, alpha, margin = _compiled_step(
+        geometry.parameters, geometry.scale, x, y, alpha,
+        *(float(v) for v in rho_from), *(float(v) for v in rho_to))
+    return ((x, y, alpha), margin) if ok else None
+
+
+@numba.njit(cache=True)
+def _compiled_step(parameters, scale, x, y, alpha, r1, r2, r3, t1, t2, t3):
+    """:func:`_step` on floats: ``(converged, x, y, alpha, margin)``."""
+    rows = _row_terms(x, y, alpha, parameters)
     (dx, dy, da), det = _adjugate_product(rows, r1 * (t1 - r1), r2 * (t2 - r2), r3 * (t3 - r3))
     if det == 0.0:
-        return None
+        return False, x, y, alpha, 0.0
     x, y, alpha = x + dx / det, y + dy / det, alpha + da / det
-    tol = _RESIDUAL_TOL * geometry.scale**2
+    tol = _RESIDUAL_TOL * scale * scale
     for _ in range(_NEWTON_STEPS):
-        rows = _row_terms(x, y, alpha, geometry, math.cos, math.sin)
-        residual = _leg_residuals(rows, target)
-        if max(abs(v) for v in residual) < tol:
-            return (x, y, alpha), _scalar_margin(rows, geometry.scale)
-        (dx, dy, da), det = _adjugate_product(rows, *residual)
+        rows = _row_terms(x, y, alpha, parameters)
+        e1, e2, e3 = _leg_residuals(rows, (t1, t2, t3))
+        if max(abs(e1), abs(e2), abs(e3)) < tol:
+            norms = _row_norms(rows, scale)
+            margin = 0.0
+            if norms[0] > 0 and norms[1] > 0 and norms[2] > 0:
+                margin = _normalised_det(rows, norms, scale)
+            return True, x, y, alpha, margin
+        (dx, dy, da), det = _adjugate_product(rows, e1, e2, e3)
         if det == 0.0:
-            return None
+            return False, x, y, alpha, 0.0
         x, y, alpha = x - 0.5 * dx / det, y - 0.5 * dy / det, alpha - 0.5 * da / det
-    return None
+    return False, x, y, alpha, 0.0
 
 
 # --- cusps of the slices at fixed rho1 ----------------------------------------------
