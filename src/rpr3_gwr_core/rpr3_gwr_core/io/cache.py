@@ -2,18 +2,20 @@
 
 The only module of the core that touches the file system: the CLI and the
 nodes use it so that a second call with the same mechanism and grid loads the
-roadmap instead of rebuilding it.  Entries are numpy ``.npz`` archives of
-:func:`~rpr3_gwr_core.io.export.roadmap_arrays` with the mechanism and grid
-documents, written atomically: the full 3-DOF roadmap's arrays (about
-300 MB) load in a fraction of the time their JSON would take.
+roadmap instead of rebuilding it.  An entry is a folder of ``.npy`` files,
+one per array of :func:`~rpr3_gwr_core.io.export.roadmap_arrays`, with the
+mechanism and grid documents in ``header.json``, written to a temporary
+folder and renamed into place: the full 3-DOF roadmap's arrays (about
+400 MB) load in a tenth of a second from the page cache, without the
+checksums and copies of a zip archive.
 """
 
 import hashlib
 import json
 import os
+import shutil
 import tempfile
 import time
-import zipfile
 
 import numpy as np
 
@@ -66,12 +68,12 @@ def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=No
         Whether it came from the cache.
     """
     directory = cache_dir or default_cache_dir()
-    path = os.path.join(directory, cache_key(mechanism, grid, refinement=refinement) + ".npz")
-    if os.path.exists(path):
+    path = os.path.join(directory, cache_key(mechanism, grid, refinement=refinement))
+    if os.path.isdir(path):
         try:
             return _load(path), True
-        except (InvalidInputError, OSError, ValueError, KeyError, zipfile.BadZipFile):
-            pass  # a damaged entry is rebuilt below
+        except (InvalidInputError, OSError, ValueError, KeyError):
+            shutil.rmtree(path, ignore_errors=True)  # a damaged entry is rebuilt below
     begin = time.perf_counter()
     if refinement is not None:
         grid = refine(mechanism, grid, refinement)
@@ -80,26 +82,34 @@ def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=No
     if refinement is not None:
         roadmap.timings["refine"] = refined
     os.makedirs(directory, exist_ok=True)
-    handle, tmp = tempfile.mkstemp(dir=directory, suffix=".npz")
-    with os.fdopen(handle, "wb") as stream:
-        _save(stream, roadmap)
-    os.replace(tmp, path)
+    staging = tempfile.mkdtemp(dir=directory, suffix=".tmp")
+    _save(staging, roadmap)
+    try:
+        os.rename(staging, path)
+    except OSError:  # another process stored the same entry meanwhile
+        shutil.rmtree(staging, ignore_errors=True)
     return roadmap, False
 
 
-def _save(stream, roadmap):
+def _save(folder, roadmap):
     arrays = roadmap_arrays(roadmap)
+    links = arrays.pop("links")
     header = {"mechanism": roadmap.mechanism.to_dict(), "grid": roadmap.grid.to_dict(),
-              "axes": len(arrays["links"])}
-    links = {f"links_{k}": match for k, match in enumerate(arrays.pop("links"))}
-    np.savez(stream, header=np.frombuffer(json.dumps(header).encode(), dtype=np.uint8),
-             **arrays, **links)
+              "arrays": sorted(arrays), "axes": len(links)}
+    arrays.update({f"links_{k}": match for k, match in enumerate(links)})
+    for name, array in arrays.items():
+        np.save(os.path.join(folder, name + ".npy"), array)
+    with open(os.path.join(folder, "header.json"), "w", encoding="utf-8") as stream:
+        json.dump(header, stream)
 
 
-def _load(path):
-    with np.load(path) as archive:
-        header = json.loads(archive["header"].tobytes().decode())
-        arrays = {name: archive[name] for name in archive.files
-                  if name != "header" and not name.startswith("links_")}
-        arrays["links"] = [archive[f"links_{k}"] for k in range(header["axes"])]
+def _load(folder):
+    with open(os.path.join(folder, "header.json"), encoding="utf-8") as stream:
+        header = json.load(stream)
+
+    def read(name):
+        return np.load(os.path.join(folder, name + ".npy"), allow_pickle=False)
+
+    arrays = {name: read(name) for name in header["arrays"]}
+    arrays["links"] = [read(f"links_{k}") for k in range(header["axes"])]
     return roadmap_from_arrays(header["mechanism"], header["grid"], arrays)
