@@ -7,10 +7,13 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 from scipy.optimize import brentq
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import dijkstra
 
 from rpr3_gwr_core.exceptions import (AssemblyModeError, InfeasiblePathError, InvalidInputError,
                                       NoSolutionError, OutOfGridError, FixedJointMismatchError,
                                       SingularityError)
+from rpr3_gwr_core.mechanisms.rpr3 import Geometry
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, rho1_slice
 from rpr3_gwr_core.planning.global_planning import feasibility, global_paths
 from rpr3_gwr_core.mechanisms.rpr3 import inverse_kinematics, singularity_margin
@@ -71,6 +74,88 @@ def test_returned_trajectory_passes_an_independent_validation(planner, paper_roa
                               max_step=0.01)
         assert again.ok, again.reason
         np.testing.assert_allclose(inverse_kinematics(plan.poses), plan.joints, atol=1e-7)
+
+
+def _layered_reference_cost(roadmap, patches, start_cell, goal_cell, clearance):
+    """Least cost of a cell path through the given patches in order, by
+    Dijkstra on a graph built here from the continuation links: a step stays
+    in its patch or enters the next one, costs its length times the mean
+    cost of its two solutions, and a solution below the clearance costs 100."""
+    seg = roadmap.segmentation
+    slots = seg.patch.shape[1]
+    layer = {pid: k for k, pid in enumerate(patches)}
+    coords = roadmap.grid.coordinates()
+    cost = np.where(np.abs(seg.field.margin) < clearance, 100.0, 1.0).ravel()
+    rows, cols, weights = [], [], []
+    for lower, upper, match in seg.links:
+        cells, slot = np.nonzero(match >= 0)
+        a = lower[cells] * slots + slot
+        b = upper[cells] * slots + match[cells, slot]
+        length = np.abs(coords[lower[cells]] - coords[upper[cells]]).sum(axis=1)
+        weight = 0.5 * length * (cost[a] + cost[b])
+        la = np.array([layer.get(p, -9) for p in seg.patch.ravel()[a]])
+        lb = np.array([layer.get(p, -9) for p in seg.patch.ravel()[b]])
+        for u, v, lu, lv in ((a, b, la, lb), (b, a, lb, la)):
+            keep = (lu >= 0) & ((lv == lu) | (lv == lu + 1))
+            rows.append(u[keep])
+            cols.append(v[keep])
+            weights.append(weight[keep])
+    n = seg.patch.size
+    graph = csr_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))),
+                       shape=(n, n))
+    source = start_cell * slots + int(np.flatnonzero(seg.patch[start_cell] == patches[0])[0])
+    target = goal_cell * slots + int(np.flatnonzero(seg.patch[goal_cell] == patches[-1])[0])
+    return dijkstra(graph, indices=source)[target]
+
+
+@pytest.mark.parametrize("clearance", [0.0, 0.02])
+def test_local_paths_cost_what_dijkstra_finds(planner, paper_roadmap, clearance):
+    """The A* with its gate and landmark estimates returns least-cost paths."""
+    rng = np.random.default_rng(5)
+    seg = paper_roadmap.segmentation
+    checked = 0
+    for _ in range(12):
+        start_patch, goal_patch = rng.choice(sorted(seg.patches), 2)
+        answer = feasibility(planner.index, start_patch, goal_patch)
+        if not answer.feasible:
+            continue
+        path = global_paths(planner.index, start_patch, goal_patch)[0].patches
+        start_cell = int(rng.choice(seg.patches[path[0]].cells))
+        goal_cell = int(rng.choice(seg.patches[path[-1]].cells))
+        local = planner.local.plan(path, start_cell, goal_cell, clearance=clearance)
+        reference = _layered_reference_cost(paper_roadmap, path, start_cell, goal_cell,
+                                            clearance)
+        assert local.cost == pytest.approx(reference, rel=1e-9), path
+        checked += 1
+    assert checked >= 4
+
+
+class _InterpretedGeometry(Geometry):
+    """The paper's geometry without its compiled step: the validator then
+    runs its loop in the interpreter, on :meth:`Geometry.step`."""
+
+    step_kernel = None
+
+
+@pytest.mark.parametrize("min_margin", [1e-3, 0.02, 0.2])
+def test_the_compiled_validator_agrees_with_the_interpreted_one(planner, min_margin):
+    interpreted = _InterpretedGeometry()
+    plans = [planner.plan(start, goal) for start, goal in ((Q1, Q2), (MODE_A, MODE_B))]
+    paths = [(p.joints, p.start.pose, p.goal.pose) for p in plans]
+    # Straight across, the first example crosses the singular locus, and the
+    # second one's platform stays in its mode, so it misses the goal pose.
+    paths += [(p.joints[[0, -1]], p.start.pose, p.goal.pose) for p in plans]
+    outcomes = set()
+    for joints, start, goal in paths:
+        compiled = validate_path(PAPER_GEOMETRY, joints, start, goal, min_margin)
+        again = validate_path(interpreted, joints, start, goal, min_margin)
+        assert (compiled.ok, compiled.reason, compiled.aspect, compiled.steps,
+                compiled.failed_segment) == (again.ok, again.reason, again.aspect, again.steps,
+                                             again.failed_segment)
+        assert compiled.min_margin == pytest.approx(again.min_margin, abs=1e-12)
+        np.testing.assert_allclose(compiled.poses, again.poses, atol=1e-12)
+        outcomes.add(compiled.reason.split(" ")[0])
+    assert len(outcomes) >= 2
 
 
 def test_smoothing_shortens_the_path_and_keeps_the_margin(planner):
@@ -188,8 +273,16 @@ def test_every_plan_validates_and_infeasible_only_without_roadmap_path(planner, 
 
 def test_shortcut_keeps_the_ends_and_cutting_corners_keeps_the_endpoints():
     points = np.array([[0, 0], [1, 0], [2, 0], [3, 0], [3, 1]], dtype=float)
-    keep = shortcut(points, lambda i, j: points[i, 1] == points[j, 1] or j - i == 1)
-    assert keep[0] == 0 and keep[-1] == 4 and len(keep) < 5
+    asked = []
+
+    def allowed(i, js):
+        asked.append((i, js.tolist()))
+        return (points[js, 1] == points[i, 1]) | (js - i == 1)
+
+    keep = shortcut(points, allowed)
+    # The longest jump, then halved ones: 0 -> 4 is refused, 0 -> 2 taken.
+    assert asked[0] == (0, [4, 2])
+    assert keep.tolist() == [0, 2, 3, 4]
     rounded, origin = cut_corners(points[keep], np.ones(len(keep), dtype=bool))
     np.testing.assert_allclose(rounded[0], points[0])
     np.testing.assert_allclose(rounded[-1], points[-1])

@@ -10,17 +10,27 @@ the roadmap built over its joints and from the planner that uses both.
 Vectorised methods take arrays with any leading shape; :meth:`Mechanism.step`
 is the scalar predictor-corrector step that sequential continuation (the
 validator, the driver) takes thousands of times, so implementations serve it
-from the same equations evaluated on floats.
+from the same equations evaluated on floats.  A mechanism may also offer that
+step compiled (:attr:`Mechanism.step_kernel`), so the validator's whole loop
+runs outside the interpreter.
 """
 
 import abc
 import math
 
+from numba import types
 import numpy as np
 
 from ..exceptions import InvalidInputError
 
-__all__ = ["Mechanism", "mechanism_from_dict", "register_mechanism"]
+__all__ = ["Mechanism", "mechanism_from_dict", "register_mechanism", "STEP_KERNEL_SIGNATURE"]
+
+# ``margin = kernel(parameters, pose, joints_from, joints_to)``: one
+# predictor-corrector step that overwrites ``pose`` (its coordinates at
+# ``joints_from``) with the pose at ``joints_to`` and returns its margin, or
+# returns NaN, leaving ``pose`` as it was, when the corrector does not converge.
+STEP_KERNEL_SIGNATURE = types.float64(types.float64[::1], types.float64[::1],
+                                      types.float64[::1], types.float64[::1])
 
 _REGISTRY = {}
 
@@ -138,6 +148,19 @@ class Mechanism(abc.ABC):
             The pose at ``joints_to`` and its margin, or None when the
             corrector does not converge.
         """
+
+    @property
+    def step_kernel(self):
+        """:meth:`step` compiled by numba, if the mechanism has it.
+
+        Returns
+        -------
+        (numba dispatcher, ndarray) or None
+            A function compiled for :data:`STEP_KERNEL_SIGNATURE` and the
+            ``parameters`` array it takes; None (the default) makes the
+            validator call :meth:`step` from the interpreter.
+        """
+        return None
 
     @abc.abstractmethod
     def to_dict(self):

@@ -45,7 +45,7 @@ from numba.extending import register_jitable
 import numpy as np
 
 from ..exceptions import InvalidInputError
-from .base import Mechanism, register_mechanism
+from .base import STEP_KERNEL_SIGNATURE, Mechanism, register_mechanism
 
 __all__ = [
     "Geometry",
@@ -220,6 +220,10 @@ class Geometry(Mechanism):
 
     def step(self, pose, joints_from, joints_to):
         return _step(self, pose, joints_from, joints_to)
+
+    @functools.cached_property
+    def step_kernel(self):
+        return _step_kernel, np.array([*self.parameters, self.scale])
 
     def refine_cusp(self, pose, fixed):
         if set(fixed) != {0}:
@@ -534,6 +538,20 @@ def _compiled_step(parameters, scale, x, y, alpha, r1, r2, r3, t1, t2, t3):
             return False, x, y, alpha, 0.0
         x, y, alpha = x - 0.5 * dx / det, y - 0.5 * dy / det, alpha - 0.5 * da / det
     return False, x, y, alpha, 0.0
+
+
+@numba.njit(STEP_KERNEL_SIGNATURE, cache=True)
+def _step_kernel(parameters, pose, joints_from, joints_to):
+    """:func:`_compiled_step` as :data:`~.base.STEP_KERNEL_SIGNATURE` takes
+    it; ``parameters`` are :attr:`Geometry.parameters`, then the scale."""
+    p = parameters
+    ok, x, y, alpha, margin = _compiled_step(
+        (p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8]), p[9], pose[0], pose[1], pose[2],
+        joints_from[0], joints_from[1], joints_from[2], joints_to[0], joints_to[1], joints_to[2])
+    if not ok:
+        return np.nan
+    pose[0], pose[1], pose[2] = x, y, alpha
+    return margin
 
 
 # --- cusps of the slices at fixed rho1 ----------------------------------------------

@@ -11,17 +11,26 @@ adjacency to one index array.
 
 The heuristic is the L1 distance to the goal cell times the smallest node
 cost of the path's patches: every face-to-face move runs along one axis, so
-a path is at least that long and costs at least that much, and the
-heuristic is consistent; A* therefore returns a least-cost path, like
-Dijkstra, after settling only the nodes whose estimate is below its cost.
-Ties are broken towards the deeper node, which on a lattice with many
-equal-cost staircases keeps the search near one of them.
+a path is at least that long and costs at least that much.  In the layers
+before the last it is the larger of that and the node's least cost to the
+gate to the next layer, within its patch (:func:`gate_distances`, computed
+once per patch, gate and cost and kept by the caller), plus the least such
+estimate at that gate's far side.  In the last layer, where the path stays
+in the goal's patch, the least costs to each of that patch's gates are
+landmarks: by the triangle inequality a node is at least as far from the
+goal as the difference of its and the goal's costs to one gate.  All these
+are lower bounds that drop by at most an edge's cost along an edge, so the
+heuristic is consistent; A* therefore
+returns a least-cost path, like Dijkstra, after settling only the nodes
+whose estimate is below its cost.  Ties are broken towards the deeper node,
+which on a lattice with many equal-cost staircases keeps the search near
+one of them.
 """
 
 import numba
 import numpy as np
 
-__all__ = ["adjacency", "layered_astar"]
+__all__ = ["adjacency", "layered_astar", "gate_distances", "gate_nodes"]
 
 
 @numba.njit(cache=True)
@@ -111,10 +120,99 @@ def _cost(node_cost, node_margin, clearance, penalty, u):
     return node_cost[u] * penalty if node_margin[u] < clearance else node_cost[u]
 
 
+@numba.njit(cache=True, nogil=True)
+def gate_nodes(indptr, indices, node_patch, first, stop, other):
+    """Nodes in ``[first, stop)`` (one patch) with an edge to a node of patch
+    index ``other``, ascending."""
+    out = np.empty(stop - first, np.int64)
+    count = 0
+    for u in range(first, stop):
+        for e in range(indptr[u], indptr[u + 1]):
+            if node_patch[indices[e]] == other:
+                out[count] = u
+                count += 1
+                break
+    return out[:count]
+
+
+@numba.njit(cache=True, nogil=True)
+def gate_distances(indptr, indices, node_cell, node_cost, node_margin, clearance, penalty,
+                   coords, first, stop, sources):
+    """Least cost from each node of one patch to any of ``sources`` within the
+    patch (Dijkstra), the costs of :func:`layered_astar`.
+
+    Parameters
+    ----------
+    first, stop : int
+        The patch's nodes are ``first .. stop - 1``.
+    sources : ndarray of int
+        Nodes of the patch at cost 0.
+
+    Returns
+    -------
+    ndarray of float64, shape (stop - first,)
+        Infinite where no source can be reached.
+    """
+    distance = np.full(stop - first, np.inf)
+    done = np.zeros(stop - first, np.uint8)
+    capacity = max(16, 2 * sources.size)
+    key = np.empty(capacity)
+    tie = np.zeros(capacity)
+    item = np.empty(capacity, np.int64)
+    size = 0
+    for s in sources:
+        distance[s - first] = 0.0
+        key[size] = 0.0
+        item[size] = s
+        size += 1
+    while size > 0:
+        u = item[0]
+        size -= 1
+        if size > 0:
+            key[0], tie[0], item[0] = key[size], tie[size], item[size]
+            _sift_down(key, tie, item, size)
+        if done[u - first]:
+            continue
+        done[u - first] = 1
+        cost_u = _cost(node_cost, node_margin, clearance, penalty, u)
+        for e in range(indptr[u], indptr[u + 1]):
+            v = indices[e]
+            if v < first or v >= stop or done[v - first]:
+                continue
+            reach = distance[u - first] + 0.5 * _l1(coords, node_cell[u], node_cell[v]) * (
+                cost_u + _cost(node_cost, node_margin, clearance, penalty, v))
+            if reach < distance[v - first]:
+                distance[v - first] = reach
+                if size == capacity:
+                    capacity *= 2
+                    key = np.concatenate((key, np.empty(size)))
+                    tie = np.concatenate((tie, np.empty(size)))
+                    item = np.concatenate((item, np.empty(size, np.int64)))
+                key[size] = reach
+                item[size] = v
+                _sift_up(key, tie, item, size)
+                size += 1
+    return distance
+
+
 @numba.njit(cache=True)
+def _estimate(coords, node_cell, node_patch, layer, to_gate, to_gate_start, rest, landmarks,
+              last, cost_floor, goal, v):
+    """The heuristic of node ``v`` (module doc)."""
+    direct = cost_floor * _l1(coords, node_cell[v], goal)
+    here = layer[node_patch[v]]
+    if here < last:
+        return max(direct, to_gate[to_gate_start[here] + v] + rest[here])
+    at = v + to_gate_start[last]
+    for j in range(landmarks.shape[0]):
+        direct = max(direct, abs(landmarks[j, at] - landmarks[j, -1]))
+    return direct
+
+
+@numba.njit(cache=True, nogil=True)
 def layered_astar(indptr, indices, node_cell, node_patch, node_cost, node_margin, clearance,
-                  penalty, coords, layer, source, target, blocked, cost_floor, g, pred, closed,
-                  touched):
+                  penalty, coords, layer, source, target, blocked, cost_floor, to_gate,
+                  to_gate_start, rest, landmarks, g, pred, closed, touched):
     """Least-cost node path from ``source`` to ``target`` through the layers.
 
     Parameters
@@ -141,6 +239,17 @@ def layered_astar(indptr, indices, node_cell, node_patch, node_cost, node_margin
         Cells not to enter, ascending.
     cost_floor : float
         Smallest ``node_cost`` on the path's patches (scales the heuristic).
+    to_gate, to_gate_start, rest : ndarray of float64, int64, float64
+        The heuristic of the layers before the last: a node ``v`` in layer
+        ``i`` is estimated at ``to_gate[to_gate_start[i] + v] + rest[i]``
+        (:func:`gate_distances` of its patch to the next gate, and the least
+        estimate beyond that gate); ``-to_gate_start[last]`` is the first
+        node of the last layer.
+    landmarks : ndarray of float64, shape (k, n + 1)
+        :func:`gate_distances` of the last layer's patch (its ``n`` nodes) to
+        each of its gates, then of the target: by the triangle inequality,
+        within the patch a node is at least ``|landmarks[j, node] -
+        landmarks[j, -1]|`` from the target.
     g, pred, closed, touched : ndarray, shape (n_nodes,)
         Work arrays: ``g`` all infinite and ``closed`` all zero on entry,
         and so again on return.
@@ -156,11 +265,13 @@ def layered_astar(indptr, indices, node_cell, node_patch, node_cost, node_margin
     tie = np.empty(capacity)
     item = np.empty(capacity, np.int64)
     goal = node_cell[target]
+    last = layer[node_patch[target]]
     g[source] = 0.0
     pred[source] = -1
     touched[0] = source
     n_touched = 1
-    key[0] = cost_floor * _l1(coords, node_cell[source], goal)
+    key[0] = _estimate(coords, node_cell, node_patch, layer, to_gate, to_gate_start, rest,
+                       landmarks, last, cost_floor, goal, source)
     tie[0] = 0.0
     item[0] = source
     size = 1
@@ -203,7 +314,9 @@ def layered_astar(indptr, indices, node_cell, node_patch, node_cost, node_margin
                     key = np.concatenate((key, np.empty(size)))
                     tie = np.concatenate((tie, np.empty(size)))
                     item = np.concatenate((item, np.empty(size, np.int64)))
-                key[size] = reach + cost_floor * _l1(coords, other, goal)
+                key[size] = reach + _estimate(coords, node_cell, node_patch, layer, to_gate,
+                                              to_gate_start, rest, landmarks, last, cost_floor,
+                                              goal, v)
                 tie[size] = -reach
                 item[size] = v
                 _sift_up(key, tie, item, size)

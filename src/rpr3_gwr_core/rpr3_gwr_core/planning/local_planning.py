@@ -21,16 +21,20 @@ steps to the next one across a face of the planned gate.  One least-cost
 search from the start cell to the goal cell of the last layer then gives the
 best stitched path: it crosses exactly the gates of the global path, in
 order, and never a singular boundary or another gate.  The node graph of the
-whole roadmap is built once, when the planner is made.
+whole roadmap is built once, when the planner is made; each patch's least
+costs to each of its gates, which guide the search, are computed on first
+use and kept.  Searches run outside the interpreter's lock, each on work
+arrays of its own, so requests in several threads plan at once.
 """
 
 from dataclasses import dataclass
 import math
+import queue
 import threading
 
 import numpy as np
 
-from .astar import adjacency, layered_astar
+from .astar import _l1, adjacency, gate_distances, gate_nodes, layered_astar
 from ..exceptions import InfeasiblePathError, InvalidInputError
 
 __all__ = ["LocalPlanner", "LocalPath", "DEFAULT_CLEARANCE_WEIGHT"]
@@ -82,17 +86,21 @@ class LocalPlanner:
         self._node_slot = np.concatenate([p.slots for p in patches] + [np.zeros(0, np.int64)])
         self._node_patch = np.repeat(np.arange(len(patches), dtype=np.int32), sizes)
         self._indptr, self._indices = adjacency(n_nodes, *self._edges(patches))
+        position = {pid: k for k, pid in enumerate(self._pids.tolist())}
+        self._neighbours = [[] for _ in patches]
+        for a, b in seg.gates:
+            self._neighbours[position[a]].append(position[b])
+            self._neighbours[position[b]].append(position[a])
         self._coords = np.ascontiguousarray(seg.field.grid.coordinates(), dtype=np.float64)
         self._node_margin = np.abs(seg.field.margin[self._node_cell, self._node_slot])
         # Per clearance weight, costs are filled patch by patch on first use
         # (the clearance of a large 3-D patch takes a while).
         self._node_cost = {}
         self._cost_floor = {}
+        self._to_gate = {}
+        self._gate_nodes = {}
         self._lock = threading.Lock()
-        self._g = np.full(n_nodes, np.inf)
-        self._pred = np.empty(n_nodes, np.int64)
-        self._closed = np.zeros(n_nodes, np.uint8)
-        self._touched = np.empty(n_nodes, np.int64)
+        self._work = queue.SimpleQueue()
 
     def _edges(self, patches):
         """The node pairs of every continuation link between two patch
@@ -125,6 +133,49 @@ class LocalPlanner:
                 costs[self._offsets[k]:self._offsets[k + 1]] = cost
             self._cost_floor[weight, pid] = float(np.min(cost))
         return costs, self._cost_floor[weight, pid]
+
+    def _patch_nodes(self, k, other):
+        """Nodes of the patch at index ``k`` joined to the patch at index ``other``."""
+        if (k, other) not in self._gate_nodes:
+            self._gate_nodes[k, other] = gate_nodes(
+                self._indptr, self._indices, self._node_patch, self._offsets[k],
+                self._offsets[k + 1], other)
+        return self._gate_nodes[k, other]
+
+    def _distances_to_gate(self, costs, key, k, other):
+        """:func:`~.astar.gate_distances` of the patch at index ``k`` to its
+        gate to ``other``, for the costs ``key`` = (weight, clearance)."""
+        if (key, k, other) not in self._to_gate:
+            self._to_gate[key, k, other] = gate_distances(
+                self._indptr, self._indices, self._node_cell, costs, self._node_margin,
+                key[1], _LOW_MARGIN_FACTOR, self._coords, self._offsets[k],
+                self._offsets[k + 1], self._patch_nodes(k, other))
+        return self._to_gate[key, k, other]
+
+    def _heuristic(self, index, costs, key, floor, target):
+        """``to_gate``, ``to_gate_start``, ``rest`` and ``landmarks`` of
+        :func:`~.astar.layered_astar` for the patches at ``index``, the layers
+        in order, and the target node."""
+        fields = [self._distances_to_gate(costs, key, k, m) for k, m in zip(index, index[1:])]
+        last, goal_cell = index[-1], self._node_cell[target]
+        first = self._offsets[last]
+        starts = np.cumsum([0] + [f.size for f in fields]) - self._offsets[index]
+        starts[-1] = -first
+        landmarks = np.array(
+            [np.append(field, field[target - first]) for field in (
+                self._distances_to_gate(costs, key, last, other)
+                for other in self._neighbours[last])], dtype=float).reshape(
+                    -1, self._offsets[last + 1] - first + 1)
+        rest = np.zeros(len(index))
+        if len(index) > 1:
+            entry = self._patch_nodes(index[-1], index[-2])
+            rest[-2] = floor * min(_l1(self._coords, c, goal_cell)
+                                   for c in self._node_cell[entry].tolist())
+        for i in range(len(index) - 3, -1, -1):
+            entry = self._patch_nodes(index[i + 1], index[i]) - self._offsets[index[i + 1]]
+            rest[i] = rest[i + 1] + float(np.min(fields[i + 1][entry]))
+        return (np.concatenate(fields + [np.zeros(0)]), starts.astype(np.int64), rest,
+                landmarks)
 
     def cells_around(self, point, radius):
         """Cells within ``radius`` grid steps of a point along every axis.
@@ -214,13 +265,27 @@ class LocalPlanner:
         layer = np.full(self._pids.size, -1, dtype=np.int32)
         layer[index] = np.arange(len(patches), dtype=np.int32)
         blocked = np.array(sorted(blocked), dtype=np.int64)
+        key = (float(clearance_weight), float(clearance))
+        index = index.tolist()
         with self._lock:
-            costed = [self._costed(float(clearance_weight), k) for k in index.tolist()]
+            costed = [self._costed(key[0], k) for k in index]
+            costs = costed[0][0]
+            floor = min(f for _, f in costed)
+            heuristic = self._heuristic(index, costs, key, floor, target)
+        try:
+            work = self._work.get_nowait()
+        except queue.Empty:
+            n_nodes = self._node_cell.size
+            work = (np.full(n_nodes, np.inf), np.empty(n_nodes, np.int64),
+                    np.zeros(n_nodes, np.uint8), np.empty(n_nodes, np.int64))
+        try:
             nodes, cost = layered_astar(
-                self._indptr, self._indices, self._node_cell, self._node_patch,
-                costed[0][0], self._node_margin, float(clearance), _LOW_MARGIN_FACTOR,
-                self._coords, layer, source, target, blocked, min(f for _, f in costed),
-                self._g, self._pred, self._closed, self._touched)
+                self._indptr, self._indices, self._node_cell, self._node_patch, costs,
+                self._node_margin, key[1], _LOW_MARGIN_FACTOR, self._coords, layer, source,
+                target, blocked, floor, *heuristic, *work)
+        finally:
+            # layered_astar leaves its work arrays as it found them.
+            self._work.put(work)
         if nodes.size == 0:
             raise InfeasiblePathError(f"no local path through patches {patches}")
         return LocalPath(cells=self._node_cell[nodes],

@@ -21,6 +21,7 @@ from ..exceptions import InfeasiblePathError, InvalidInputError, ValidationError
 from .global_planning import RoadmapIndex, feasibility, global_paths, longer_paths
 from .local_planning import DEFAULT_CLEARANCE_WEIGHT, LocalPlanner
 from .locate import DEFAULT_MODE_TOL, locate
+from .segments import segments_clear
 from .trajectory import cut_corners, shortcut, time_parameterize
 from .validation import DEFAULT_MAX_STEP, DEFAULT_MIN_MARGIN, validate_path
 
@@ -385,26 +386,41 @@ class Planner:
         slots = np.argmax(member, axis=1)
         return np.where(member.any(axis=1), np.abs(seg.field.margin[cells, slots]), 0.0)
 
-    def _straight(self, a, b, pid, floor):
-        """Whether the straight joint segment from ``a`` to ``b`` stays on
-        patch ``pid`` with margins of at least ``floor`` (sampled)."""
-        grid = self.roadmap.grid
+    def _clear(self, starts, ends, patches, floors):
+        """Whether each straight joint segment from ``starts[k]`` to
+        ``ends[k]`` stays on patch ``patches[k]`` with margins of at least
+        ``floors[k]`` (sampled), all segments at once.
+
+        Returns
+        -------
+        ndarray of bool, shape (len(starts),)
+        """
+        grid, seg = self.roadmap.grid, self.roadmap.segmentation
         free = list(grid.axis_joints)
-        span = np.max(np.abs(b[free] - a[free])) / grid.step
-        t = np.linspace(0.0, 1.0, max(2, int(span * _SAMPLES_PER_CELL) + 1))
-        cells = grid.cells_of(a[free] * (1 - t)[:, None] + b[free] * t[:, None])
-        if np.any(cells < 0):
-            return False
-        return bool(np.all(self._patch_margin(np.full(t.size, pid), cells) >= floor))
+        return segments_clear(
+            np.ascontiguousarray(np.asarray(starts)[:, free]),
+            np.ascontiguousarray(np.asarray(ends)[:, free]),
+            np.asarray(patches, dtype=np.int64), np.asarray(floors, dtype=float),
+            _SAMPLES_PER_CELL, grid.step, grid.lattice, seg.patch, seg.field.margin)
 
     def _shortcut(self, joints, patches, clearance):
         """Indices of the waypoints kept when each patch's stretch is shortcut
         by straight segments (gate crossings stay in place)."""
         margins = self._waypoint_margins(joints, patches)
+        # A segment from waypoint i may reach the end of i's run in its patch.
+        changes = np.flatnonzero(np.diff(patches) != 0)
+        run_end = np.append(changes, len(patches) - 1)[np.searchsorted(changes, np.arange(
+            len(patches)))]
+        positive = np.where(margins > 0, margins, np.inf)
 
-        def allowed(i, j):
-            return bool(np.all(patches[i:j + 1] == patches[i])) and self._straight(
-                joints[i], joints[j], patches[i], self._floor(margins[i:j + 1], clearance))
+        def allowed(i, js):
+            ok = js <= run_end[i]
+            if ok.any():
+                lowest = np.minimum.accumulate(positive[i:js.max() + 1])[js - i]
+                ok[ok] = self._clear(joints[np.full(ok.sum(), i)], joints[js[ok]],
+                                     np.full(ok.sum(), patches[i]),
+                                     np.minimum(clearance, lowest[ok]))
+            return ok
 
         return shortcut(joints, allowed)
 
@@ -416,13 +432,19 @@ class Planner:
         Returns the validation, legs and patches of the rounded path, or
         None when no corner could be cut."""
         margins = self._waypoint_margins(joints, patches)
+        inner = np.arange(1, len(joints) - 1)
+        inner = inner[(patches[inner - 1] == patches[inner])
+                      & (patches[inner] == patches[inner + 1])]
+        # Cutting corner i replaces it by points a quarter of the way to its
+        # neighbours: three segments to check.
+        before = 0.75 * joints[inner] + 0.25 * joints[inner - 1]
+        after = 0.75 * joints[inner] + 0.25 * joints[inner + 1]
+        floors = [self._floor(margins[i - 1:i + 2], clearance) for i in inner]
+        clear = self._clear(np.concatenate([joints[inner - 1], before, after]),
+                            np.concatenate([before, after, joints[inner + 1]]),
+                            np.tile(patches[inner], 3), np.tile(floors, 3))
         corners = np.zeros(len(joints), dtype=bool)
-        for i in range(1, len(joints) - 1):
-            if patches[i - 1] == patches[i] == patches[i + 1]:
-                floor = self._floor(margins[i - 1:i + 2], clearance)
-                cut, _ = cut_corners(joints[i - 1:i + 2], [False, True, False])
-                corners[i] = all(self._straight(a, b, patches[i], floor)
-                                 for a, b in zip(cut, cut[1:]))
+        corners[inner] = clear.reshape(3, -1).all(axis=0)
         for _ in range(_RESTORED_SHORTCUTS + 1):
             if not corners.any():
                 return None

@@ -32,8 +32,9 @@ def shortcut(points, allowed, max_passes=3):
     points : ndarray, shape (n, d)
         Path in the grid's coordinates [joint unit].
     allowed : callable
-        ``allowed(i, j)`` is True when the straight segment from point i to
-        point j may replace the points between them.
+        ``allowed(i, js)``, for a point i and an array of later points js,
+        says for each j (array of bool) whether the straight segment from
+        point i to point j may replace the points between them.
     max_passes : int
 
     Returns
@@ -47,19 +48,26 @@ def shortcut(points, allowed, max_passes=3):
         out = [keep[0]]
         i = 0
         while i < len(keep) - 1:
-            j = len(keep) - 1
-            # Longest jump first, halving the reach so a pass costs O(n log n) tests.
-            reach = j - i
-            while reach > 1 and not allowed(keep[i], keep[i + reach]):
-                reach //= 2
-            if reach > 1:
-                changed = True
-            i += max(reach, 1)
+            # The longest jump, then halving reaches: O(log n) candidates
+            # per kept point, asked for at once.
+            reaches = [r for r in _halvings(len(keep) - 1 - i) if r > 1]
+            reach = 1
+            if reaches:
+                ok = allowed(keep[i], np.array([keep[i + r] for r in reaches]))
+                if ok.any():
+                    reach, changed = reaches[int(np.argmax(ok))], True
+            i += reach
             out.append(keep[i])
         keep = out
         if not changed:
             break
     return np.array(keep)
+
+
+def _halvings(reach):
+    while reach > 1:
+        yield reach
+        reach //= 2
 
 
 def cut_corners(points, corners):

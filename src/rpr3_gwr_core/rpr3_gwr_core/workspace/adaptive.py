@@ -37,6 +37,7 @@ has at most one neighbour per face, so the rotary disk search applies as on
 a uniform grid.
 """
 
+import functools
 import itertools
 import math
 import numbers
@@ -150,30 +151,13 @@ class AdaptiveGrid(GridBase):
         k = np.minimum(np.searchsorted(self._index, fine_flat), self.size - 1)
         return np.where(self._index[k] == fine_flat, k, -1)
 
-    def cells_of(self, points):
-        """The cell of many points, -1 outside the grid: the fine point nearest
-        each point if it is a cell, else the base point nearest it.
-
-        Parameters
-        ----------
-        points : ndarray, shape (n, ndim)
-            Axis coordinates.
-
-        Returns
-        -------
-        ndarray of int, shape (n,)
-        """
-        points = np.asarray(points, dtype=float).reshape(-1, self.ndim)
-        low = np.array([a.low for a in self.axes])
-        fine = np.rint((points - low) / np.array(self.steps)).astype(np.int64)
-        top = np.array(self.fine_shape) - 1
-        inside = np.all((fine >= 0) & (fine <= top), axis=1)
-        fine = np.clip(fine, 0, top)
-        cell = self._lookup(np.ravel_multi_index(tuple(fine.T), self.fine_shape))
-        coarse = np.rint((points - low) / np.array(self.base.steps)).astype(np.int64)
-        coarse = np.clip(coarse, 0, np.array(self.base.shape) - 1) * self.refinement
-        fallback = self._lookup(np.ravel_multi_index(tuple(coarse.T), self.fine_shape))
-        return np.where(inside, np.where(cell >= 0, cell, fallback), -1)
+    @functools.cached_property
+    def lattice(self):
+        """The cell lookup's description (:func:`~.grid.lattice_cell`): the
+        fine lattice, the cells' fine indices and the base points."""
+        return (np.array([a.low for a in self.axes]), np.array(self.steps),
+                np.array(self.fine_shape), self._index, np.array(self.base.steps),
+                self.refinement)
 
     def cell_of(self, joints):
         """The cell of a joint vector (:meth:`cells_of`).

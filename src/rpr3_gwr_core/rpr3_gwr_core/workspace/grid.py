@@ -8,17 +8,19 @@ in their order: cell ``(i, j)`` of a 2-D grid is ``i * n_1 + j``.
 """
 
 from dataclasses import dataclass
+import functools
 import itertools
 import math
 import numbers
 
+import numba
 import numpy as np
 from scipy.ndimage import distance_transform_edt
 
 from ..exceptions import InvalidInputError, OutOfGridError
 from .continuity import neighbour_pairs
 
-__all__ = ["Axis", "GridBase", "Grid"]
+__all__ = ["Axis", "GridBase", "Grid", "lattice_cell"]
 
 
 def _real(value, name):
@@ -131,6 +133,23 @@ class GridBase:
             out[:, joint] = value
         return out
 
+    def cells_of(self, points):
+        """Flat indices of the cells of many points, -1 outside the grid: the
+        cell at the lattice point nearest each point, else (a point of an
+        adaptive grid's coarse part) the cell at the nearest base point.
+
+        Parameters
+        ----------
+        points : ndarray, shape (n, ndim)
+            Axis coordinates (not whole joint vectors).
+
+        Returns
+        -------
+        ndarray of int, shape (n,)
+        """
+        points = np.ascontiguousarray(points, dtype=float).reshape(-1, self.ndim)
+        return _lattice_cells(points, *self.lattice)
+
     def joints_of(self, cell):
         """Joint vector of one cell, shape (n_joints,)."""
         index = self._lattice_index(cell)
@@ -224,24 +243,13 @@ class Grid(GridBase):
                  for v, a in zip(values, self.axes)]
         return int(np.ravel_multi_index(index, self.shape))
 
-    def cells_of(self, points):
-        """Flat indices of the cells nearest many points, -1 outside the grid.
-
-        Parameters
-        ----------
-        points : ndarray, shape (n, ndim)
-            Axis coordinates (not whole joint vectors).
-
-        Returns
-        -------
-        ndarray of int, shape (n,)
-        """
-        points = np.asarray(points, dtype=float)
-        index = [np.rint((points[:, k] - a.low) / a.step).astype(np.int64)
-                 for k, a in enumerate(self.axes)]
-        inside = np.all([(i >= 0) & (i < a.count) for i, a in zip(index, self.axes)], axis=0)
-        clipped = [np.clip(i, 0, a.count - 1) for i, a in zip(index, self.axes)]
-        return np.where(inside, np.ravel_multi_index(clipped, self.shape), -1)
+    @functools.cached_property
+    def lattice(self):
+        """The cell lookup's description (:func:`lattice_cell`): every
+        lattice point is a cell, numbered row-major."""
+        steps = np.array(self.steps)
+        return (np.array([a.low for a in self.axes]), steps, np.array(self.shape),
+                np.zeros(0, dtype=np.int64), steps, 1)
 
     def pairs(self):
         """Face-adjacent cell pairs, one ``(lower, upper)`` pair of flat-index
@@ -322,3 +330,40 @@ class Grid(GridBase):
         except (KeyError, TypeError) as exc:
             raise InvalidInputError(f"malformed grid: {exc}") from exc
 
+
+
+@numba.njit(cache=True)
+def lattice_cell(point, low, steps, shape, index, base_steps, refinement):
+    """The cell of one point (:meth:`GridBase.cells_of`), -1 outside.
+
+    ``low``, ``steps`` and ``shape`` describe the lattice; ``index`` holds
+    the ascending flat lattice index of each cell, or nothing when every
+    lattice point is a cell in row-major order; ``base_steps`` and
+    ``refinement`` give the base points (every ``refinement``-th lattice
+    point), which are always cells.
+    """
+    flat = 0
+    coarse = 0
+    for k in range(point.size):
+        nearest = np.rint((point[k] - low[k]) / steps[k])
+        # Compared as floats: NaN and huge values fall outside.
+        if not 0.0 <= nearest <= shape[k] - 1:
+            return -1
+        flat = flat * shape[k] + int(nearest)
+        top = (shape[k] - 1) // refinement
+        base = min(max(np.rint((point[k] - low[k]) / base_steps[k]), 0.0), float(top))
+        coarse = coarse * shape[k] + int(base) * refinement
+    if index.size == 0:
+        return flat
+    j = np.searchsorted(index, flat)
+    if j < index.size and index[j] == flat:
+        return j
+    return np.searchsorted(index, coarse)
+
+
+@numba.njit(cache=True)
+def _lattice_cells(points, low, steps, shape, index, base_steps, refinement):
+    out = np.empty(points.shape[0], dtype=np.int64)
+    for n in range(points.shape[0]):
+        out[n] = lattice_cell(points[n], low, steps, shape, index, base_steps, refinement)
+    return out
