@@ -9,28 +9,27 @@ face-adjacent cells costs its length (the cells' coordinate difference, one
 axis) times the mean cost of its two nodes, which keeps a 3-D roadmap's
 adjacency to one index array.
 
-The heuristic is the L1 distance to the goal cell times the smallest node
-cost of the path's patches: every face-to-face move runs along one axis, so
-a path is at least that long and costs at least that much.  In the layers
-before the last it is the larger of that and the node's least cost to the
-gate to the next layer, within its patch (:func:`gate_distances`, computed
-once per patch, gate and cost and kept by the caller), plus the least such
-estimate at that gate's far side.  In the last layer, where the path stays
-in the goal's patch, the least costs to each of that patch's gates are
-landmarks: by the triangle inequality a node is at least as far from the
-goal as the difference of its and the goal's costs to one gate.  All these
-are lower bounds that drop by at most an edge's cost along an edge, so the
-heuristic is consistent; A* therefore
-returns a least-cost path, like Dijkstra, after settling only the nodes
-whose estimate is below its cost.  Ties are broken towards the deeper node,
-which on a lattice with many equal-cost staircases keeps the search near
-one of them.
+The heuristic is the smallest node cost of the path's patches times a
+length that no path to the goal can undercut: the L1 distance to the goal
+cell (every face-to-face move runs along one axis); in the layers before the
+last, the larger of that and the node's shortest distance to the gate to the
+next layer within its patch (:func:`gate_distances`, which depend on the
+roadmap alone, computed once per patch and gate and kept by the caller) plus
+the least such estimate at that gate's far side; in the last layer, where
+the path stays in the goal's patch, the larger of the L1 distance and the
+landmark bounds: by the triangle inequality a node is at least as far from
+the goal as the difference of its and the goal's distances to one of the
+patch's gates.  Each of these lengths drops by at most an edge's length
+along an edge, so the heuristic is consistent; A* therefore returns a
+least-cost path, like Dijkstra, after settling only the nodes whose estimate
+is below its cost.  Ties are broken towards the deeper node, which on a
+lattice with many equal-cost staircases keeps the search near one of them.
 """
 
 import numba
 import numpy as np
 
-__all__ = ["adjacency", "layered_astar", "gate_distances", "gate_nodes"]
+__all__ = ["adjacency", "edge_quanta", "layered_astar", "gate_distances", "gate_nodes"]
 
 
 @numba.njit(cache=True)
@@ -135,78 +134,107 @@ def gate_nodes(indptr, indices, node_patch, first, stop, other):
     return out[:count]
 
 
+@numba.njit(cache=True)
+def edge_quanta(indptr, indices, node_cell, coords, quantum):
+    """Length of each edge of :func:`adjacency` in whole ``quantum``, rounded
+    down, shape (indices.size,), uint16."""
+    out = np.empty(indices.size, np.uint16)
+    for u in range(indptr.size - 1):
+        for e in range(indptr[u], indptr[u + 1]):
+            out[e] = min(65535, int(_l1(coords, node_cell[u], node_cell[indices[e]]) / quantum
+                                    + 1e-9))
+    return out
+
+
 @numba.njit(cache=True, nogil=True)
-def gate_distances(indptr, indices, node_cell, node_cost, node_margin, clearance, penalty,
-                   coords, first, stop, sources):
-    """Least cost from each node of one patch to any of ``sources`` within the
-    patch (Dijkstra), the costs of :func:`layered_astar`.
+def gate_distances(indptr, indices, quanta, quantum, first, stop, sources):
+    """Shortest distance [joint unit] from each node of one patch to any of
+    ``sources`` within the patch, along the node graph, with the edge
+    lengths of :func:`edge_quanta`.
+
+    Rounded down, every distance stays a lower bound of the true one and
+    drops by at most an edge's length along an edge; in whole quanta the
+    search is Dial's (a ring of buckets instead of a heap).  A grid's face
+    lengths are whole multiples of its smallest step, the quantum the
+    planner takes, so nothing is lost.
 
     Parameters
     ----------
+    quanta : ndarray of uint16, shape (indices.size,)
+    quantum : float
+        Length unit of ``quanta`` [joint unit].
     first, stop : int
         The patch's nodes are ``first .. stop - 1``.
     sources : ndarray of int
-        Nodes of the patch at cost 0.
+        Nodes of the patch at distance 0.
 
     Returns
     -------
     ndarray of float64, shape (stop - first,)
         Infinite where no source can be reached.
     """
-    distance = np.full(stop - first, np.inf)
-    done = np.zeros(stop - first, np.uint8)
-    capacity = max(16, 2 * sources.size)
-    key = np.empty(capacity)
-    tie = np.zeros(capacity)
-    item = np.empty(capacity, np.int64)
-    size = 0
+    n = stop - first
+    unreached = np.iinfo(np.int64).max
+    distance = np.full(n, unreached, np.int64)
+    longest = 1
+    for e in range(indptr[first], indptr[stop]):
+        longest = max(longest, int(quanta[e]))
+    # Entries of the ring's buckets, as linked lists; a node enters once per
+    # improvement, so the edges bound the entries.
+    ring = longest + 1
+    head = np.full(ring, -1, np.int64)
+    capacity = sources.size + indptr[stop] - indptr[first]
+    entry_node = np.empty(capacity, np.int64)
+    entry_next = np.empty(capacity, np.int64)
+    entries = 0
     for s in sources:
-        distance[s - first] = 0.0
-        key[size] = 0.0
-        item[size] = s
-        size += 1
-    while size > 0:
-        u = item[0]
-        size -= 1
-        if size > 0:
-            key[0], tie[0], item[0] = key[size], tie[size], item[size]
-            _sift_down(key, tie, item, size)
-        if done[u - first]:
-            continue
-        done[u - first] = 1
-        cost_u = _cost(node_cost, node_margin, clearance, penalty, u)
-        for e in range(indptr[u], indptr[u + 1]):
-            v = indices[e]
-            if v < first or v >= stop or done[v - first]:
-                continue
-            reach = distance[u - first] + 0.5 * _l1(coords, node_cell[u], node_cell[v]) * (
-                cost_u + _cost(node_cost, node_margin, clearance, penalty, v))
-            if reach < distance[v - first]:
-                distance[v - first] = reach
-                if size == capacity:
-                    capacity *= 2
-                    key = np.concatenate((key, np.empty(size)))
-                    tie = np.concatenate((tie, np.empty(size)))
-                    item = np.concatenate((item, np.empty(size, np.int64)))
-                key[size] = reach
-                item[size] = v
-                _sift_up(key, tie, item, size)
-                size += 1
-    return distance
+        distance[s - first] = 0
+        entry_node[entries], entry_next[entries] = s, head[0]
+        head[0] = entries
+        entries += 1
+    pending = sources.size
+    level = 0
+    while pending > 0:
+        bucket = level % ring
+        while head[bucket] >= 0:
+            k = head[bucket]
+            head[bucket] = entry_next[k]
+            pending -= 1
+            u = entry_node[k]
+            if distance[u - first] != level:
+                continue  # a stale entry: u was reached closer since
+            for e in range(indptr[u], indptr[u + 1]):
+                v = indices[e]
+                if v < first or v >= stop:
+                    continue
+                reach = level + quanta[e]
+                if reach < distance[v - first]:
+                    distance[v - first] = reach
+                    slot = reach % ring
+                    entry_node[entries], entry_next[entries] = v, head[slot]
+                    head[slot] = entries
+                    entries += 1
+                    pending += 1
+        level += 1
+    out = np.empty(n)
+    for k in range(n):
+        out[k] = np.inf if distance[k] == unreached else distance[k] * quantum
+    return out
 
 
 @numba.njit(cache=True)
 def _estimate(coords, node_cell, node_patch, layer, to_gate, to_gate_start, rest, landmarks,
               last, cost_floor, goal, v):
     """The heuristic of node ``v`` (module doc)."""
-    direct = cost_floor * _l1(coords, node_cell[v], goal)
+    length = _l1(coords, node_cell[v], goal)
     here = layer[node_patch[v]]
     if here < last:
-        return max(direct, to_gate[to_gate_start[here] + v] + rest[here])
-    at = v + to_gate_start[last]
-    for j in range(landmarks.shape[0]):
-        direct = max(direct, abs(landmarks[j, at] - landmarks[j, -1]))
-    return direct
+        length = max(length, to_gate[to_gate_start[here] + v] + rest[here])
+    else:
+        at = v + to_gate_start[last]
+        for j in range(landmarks.shape[0]):
+            length = max(length, abs(landmarks[j, at] - landmarks[j, -1]))
+    return cost_floor * length
 
 
 @numba.njit(cache=True, nogil=True)
@@ -240,11 +268,11 @@ def layered_astar(indptr, indices, node_cell, node_patch, node_cost, node_margin
     cost_floor : float
         Smallest ``node_cost`` on the path's patches (scales the heuristic).
     to_gate, to_gate_start, rest : ndarray of float64, int64, float64
-        The heuristic of the layers before the last: a node ``v`` in layer
-        ``i`` is estimated at ``to_gate[to_gate_start[i] + v] + rest[i]``
-        (:func:`gate_distances` of its patch to the next gate, and the least
-        estimate beyond that gate); ``-to_gate_start[last]`` is the first
-        node of the last layer.
+        Lengths [joint unit] for the layers before the last: a node ``v`` in
+        layer ``i`` is at least ``to_gate[to_gate_start[i] + v] + rest[i]``
+        from the target (:func:`gate_distances` of its patch to the next
+        gate, and the least such bound beyond that gate);
+        ``-to_gate_start[last]`` is the first node of the last layer.
     landmarks : ndarray of float64, shape (k, n + 1)
         :func:`gate_distances` of the last layer's patch (its ``n`` nodes) to
         each of its gates, then of the target: by the triangle inequality,

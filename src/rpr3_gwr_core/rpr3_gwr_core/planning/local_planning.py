@@ -21,10 +21,11 @@ steps to the next one across a face of the planned gate.  One least-cost
 search from the start cell to the goal cell of the last layer then gives the
 best stitched path: it crosses exactly the gates of the global path, in
 order, and never a singular boundary or another gate.  The node graph of the
-whole roadmap is built once, when the planner is made; each patch's least
-costs to each of its gates, which guide the search, are computed on first
-use and kept.  Searches run outside the interpreter's lock, each on work
-arrays of its own, so requests in several threads plan at once.
+whole roadmap is built once, when the planner is made; each patch's
+distances to each of its gates, which guide the search, are computed on
+first use (or by :meth:`LocalPlanner.prepare`) and kept.  Searches run
+outside the interpreter's lock, each on work arrays of its own, so requests
+in several threads plan at once.
 """
 
 from dataclasses import dataclass
@@ -34,7 +35,7 @@ import threading
 
 import numpy as np
 
-from .astar import _l1, adjacency, gate_distances, gate_nodes, layered_astar
+from .astar import _l1, adjacency, edge_quanta, gate_distances, gate_nodes, layered_astar
 from ..exceptions import InfeasiblePathError, InvalidInputError
 
 __all__ = ["LocalPlanner", "LocalPath", "DEFAULT_CLEARANCE_WEIGHT"]
@@ -92,6 +93,9 @@ class LocalPlanner:
             self._neighbours[position[a]].append(position[b])
             self._neighbours[position[b]].append(position[a])
         self._coords = np.ascontiguousarray(seg.field.grid.coordinates(), dtype=np.float64)
+        self._quantum = float(seg.field.grid.step)
+        self._quanta = edge_quanta(self._indptr, self._indices, self._node_cell, self._coords,
+                                   self._quantum)
         self._node_margin = np.abs(seg.field.margin[self._node_cell, self._node_slot])
         # Per clearance weight, costs are filled patch by patch on first use
         # (the clearance of a large 3-D patch takes a while).
@@ -136,46 +140,56 @@ class LocalPlanner:
 
     def _patch_nodes(self, k, other):
         """Nodes of the patch at index ``k`` joined to the patch at index ``other``."""
-        if (k, other) not in self._gate_nodes:
-            self._gate_nodes[k, other] = gate_nodes(
+        nodes = self._gate_nodes.get((k, other))
+        if nodes is None:
+            nodes = self._gate_nodes.setdefault((k, other), gate_nodes(
                 self._indptr, self._indices, self._node_patch, self._offsets[k],
-                self._offsets[k + 1], other)
-        return self._gate_nodes[k, other]
+                self._offsets[k + 1], other))
+        return nodes
 
-    def _distances_to_gate(self, costs, key, k, other):
+    def _distances_to_gate(self, k, other):
         """:func:`~.astar.gate_distances` of the patch at index ``k`` to its
-        gate to ``other``, for the costs ``key`` = (weight, clearance)."""
-        if (key, k, other) not in self._to_gate:
-            self._to_gate[key, k, other] = gate_distances(
-                self._indptr, self._indices, self._node_cell, costs, self._node_margin,
-                key[1], _LOW_MARGIN_FACTOR, self._coords, self._offsets[k],
-                self._offsets[k + 1], self._patch_nodes(k, other))
-        return self._to_gate[key, k, other]
+        gate to ``other``."""
+        # Computed without a lock: two threads may both compute one the first
+        # time, and keep the same values.
+        distances = self._to_gate.get((k, other))
+        if distances is None:
+            distances = self._to_gate.setdefault((k, other), gate_distances(
+                self._indptr, self._indices, self._quanta, self._quantum, self._offsets[k],
+                self._offsets[k + 1], self._patch_nodes(k, other)))
+        return distances
 
-    def _heuristic(self, index, costs, key, floor, target):
+    def _heuristic(self, index, target):
         """``to_gate``, ``to_gate_start``, ``rest`` and ``landmarks`` of
         :func:`~.astar.layered_astar` for the patches at ``index``, the layers
         in order, and the target node."""
-        fields = [self._distances_to_gate(costs, key, k, m) for k, m in zip(index, index[1:])]
+        fields = [self._distances_to_gate(k, m) for k, m in zip(index, index[1:])]
         last, goal_cell = index[-1], self._node_cell[target]
         first = self._offsets[last]
         starts = np.cumsum([0] + [f.size for f in fields]) - self._offsets[index]
         starts[-1] = -first
         landmarks = np.array(
             [np.append(field, field[target - first]) for field in (
-                self._distances_to_gate(costs, key, last, other)
-                for other in self._neighbours[last])], dtype=float).reshape(
-                    -1, self._offsets[last + 1] - first + 1)
+                self._distances_to_gate(last, other) for other in self._neighbours[last])],
+            dtype=float).reshape(-1, self._offsets[last + 1] - first + 1)
         rest = np.zeros(len(index))
         if len(index) > 1:
             entry = self._patch_nodes(index[-1], index[-2])
-            rest[-2] = floor * min(_l1(self._coords, c, goal_cell)
-                                   for c in self._node_cell[entry].tolist())
+            rest[-2] = min(_l1(self._coords, c, goal_cell)
+                           for c in self._node_cell[entry].tolist())
         for i in range(len(index) - 3, -1, -1):
             entry = self._patch_nodes(index[i + 1], index[i]) - self._offsets[index[i + 1]]
             rest[i] = rest[i + 1] + float(np.min(fields[i + 1][entry]))
         return (np.concatenate(fields + [np.zeros(0)]), starts.astype(np.int64), rest,
                 landmarks)
+
+    def prepare(self):
+        """Compute every patch's distances to each of its gates now rather
+        than on first use (a few tenths of a second for the paper's roadmap,
+        seconds for the full 3-DOF one)."""
+        for k, others in enumerate(self._neighbours):
+            for other in others:
+                self._distances_to_gate(k, other)
 
     def cells_around(self, point, radius):
         """Cells within ``radius`` grid steps of a point along every axis.
@@ -269,9 +283,9 @@ class LocalPlanner:
         index = index.tolist()
         with self._lock:
             costed = [self._costed(key[0], k) for k in index]
-            costs = costed[0][0]
-            floor = min(f for _, f in costed)
-            heuristic = self._heuristic(index, costs, key, floor, target)
+        costs = costed[0][0]
+        floor = min(f for _, f in costed)
+        heuristic = self._heuristic(index, target)
         try:
             work = self._work.get_nowait()
         except queue.Empty:
