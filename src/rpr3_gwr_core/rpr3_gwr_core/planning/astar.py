@@ -1,35 +1,50 @@
-"""Compiled graph kernels of the local planner: the node graph's adjacency and
-an A* search restricted to the layers of a global path.
+"""Compiled graph kernels of the local planner: the node graph, and one
+least-cost search that serves both an A* through the layers of a global path
+and the distances inside a patch that guide it.
 
 Each node is one solution of one cell of a patch.  The search may stay in a
 layer (a patch of the global path) or step to the next layer (across a face
 of the gate to the next patch), never elsewhere, so its path crosses exactly
 the planned gates in order.  Edge weights are not stored: an edge between
-face-adjacent cells costs its length (the cells' coordinate difference, one
-axis) times the mean cost of its two nodes, which keeps a 3-D roadmap's
-adjacency to one index array.
+face-adjacent cells costs its length times the mean cost of its two nodes,
+which keeps a 3-D roadmap's adjacency to one index array.
 
-The heuristic is the smallest node cost of the path's patches times a
-length that no path to the goal can undercut: the L1 distance to the goal
-cell (every face-to-face move runs along one axis); in the layers before the
-last, the larger of that and the node's shortest distance to the gate to the
-next layer within its patch (:func:`gate_distances`, which depend on the
-roadmap alone, computed once per patch and gate and kept by the caller) plus
-the least such estimate at that gate's far side; in the last layer, where
-the path stays in the goal's patch, the larger of the L1 distance and the
-landmark bounds: by the triangle inequality a node is at least as far from
-the goal as the difference of its and the goal's distances to one of the
-patch's gates.  Each of these lengths drops by at most an edge's length
-along an edge, so the heuristic is consistent; A* therefore returns a
-least-cost path, like Dijkstra, after settling only the nodes whose estimate
-is below its cost.  Ties are broken towards the deeper node, which on a
-lattice with many equal-cost staircases keeps the search near one of them.
+Costs are integers: lengths in whole quanta (the grid's smallest step, of
+which every face length is a multiple, :func:`edge_quanta`), node costs in
+whole units (1, or ``penalty`` below the clearance, times the caller's
+clearance weight cost in whole units), so an edge of ``q`` quanta between
+nodes of costs ``a`` and ``b`` costs ``q (a + b)``.  The open set is then a
+ring of buckets, one per cost, with no heap: Dial's algorithm, and A* on it.
+
+The heuristic is the smallest node cost of the path's patches times a length,
+in half quanta, that no path to the goal can undercut: the L1 distance to the
+goal cell (every face-to-face move runs along one axis); in the layers
+before the last, the larger of that and the node's least cost to the gate to
+the next layer within its patch (:func:`gate_distances`, which depend on the
+roadmap and the clearance only, computed once per patch and gate and kept by
+the caller) plus the least such estimate at that gate's far side; in the last
+layer, where the path stays in the goal's patch, the larger of the L1
+distance and the landmark bounds: by the triangle inequality a node costs at
+least the difference of its and the goal's costs to one of the patch's
+gates.  Each of these drops by at most an edge's cost along an edge, so the
+heuristic is consistent and A* returns a least-cost path, like Dijkstra,
+after settling only the nodes whose estimate is below its cost.  A bucket is
+a stack, so of nodes with equal estimates the one pushed last, the deeper
+one, is settled first, which on a lattice with many equal-cost staircases
+keeps the search near one of them.
 """
 
 import numba
 import numpy as np
 
-__all__ = ["adjacency", "edge_quanta", "layered_astar", "gate_distances", "gate_nodes"]
+__all__ = ["adjacency", "edge_quanta", "gate_nodes", "gate_distances", "layered_astar",
+           "UNREACHED"]
+
+# Cost of a node the search did not reach; far above any path's, with room
+# to add estimates without overflow.
+UNREACHED = 2**50
+# Buckets of the open set's ring; estimates farther ahead wait in an overflow list.
+_RING = 4096
 
 
 @numba.njit(cache=True)
@@ -64,43 +79,6 @@ def adjacency(n_nodes, a, b):
 
 
 @numba.njit(cache=True)
-def _before(key, tie, i, j):
-    return key[i] < key[j] or (key[i] == key[j] and tie[i] < tie[j])
-
-
-@numba.njit(cache=True)
-def _swap(key, tie, item, i, j):
-    key[i], key[j] = key[j], key[i]
-    tie[i], tie[j] = tie[j], tie[i]
-    item[i], item[j] = item[j], item[i]
-
-
-@numba.njit(cache=True)
-def _sift_up(key, tie, item, i):
-    while i > 0:
-        parent = (i - 1) >> 1
-        if not _before(key, tie, i, parent):
-            break
-        _swap(key, tie, item, i, parent)
-        i = parent
-
-
-@numba.njit(cache=True)
-def _sift_down(key, tie, item, size):
-    i = 0
-    while True:
-        best = 2 * i + 1
-        if best >= size:
-            break
-        if best + 1 < size and _before(key, tie, best + 1, best):
-            best += 1
-        if not _before(key, tie, best, i):
-            break
-        _swap(key, tie, item, i, best)
-        i = best
-
-
-@numba.njit(cache=True)
 def _l1(coords, c, d):
     total = 0.0
     for k in range(coords.shape[1]):
@@ -109,14 +87,22 @@ def _l1(coords, c, d):
 
 
 @numba.njit(cache=True)
-def _is_blocked(blocked, cell):
-    k = np.searchsorted(blocked, cell)
-    return k < blocked.size and blocked[k] == cell
+def _half_quanta(coords, quantum, c, d):
+    """L1 distance of two cells in half quanta (whole, the cells being on
+    the quantum's lattice)."""
+    return int(round(2.0 * _l1(coords, c, d) / quantum))
 
 
 @numba.njit(cache=True)
-def _cost(node_cost, node_margin, clearance, penalty, u):
-    return node_cost[u] * penalty if node_margin[u] < clearance else node_cost[u]
+def edge_quanta(indptr, indices, node_cell, coords, quantum):
+    """Length of each edge of :func:`adjacency` in whole ``quantum``,
+    shape (indices.size,), uint16."""
+    out = np.empty(indices.size, np.uint16)
+    for u in range(indptr.size - 1):
+        for e in range(indptr[u], indptr[u + 1]):
+            out[e] = min(65535, _half_quanta(coords, quantum, node_cell[u],
+                                             node_cell[indices[e]]) // 2)
+    return out
 
 
 @numba.njit(cache=True, nogil=True)
@@ -135,223 +121,262 @@ def gate_nodes(indptr, indices, node_patch, first, stop, other):
 
 
 @numba.njit(cache=True)
-def edge_quanta(indptr, indices, node_cell, coords, quantum):
-    """Length of each edge of :func:`adjacency` in whole ``quantum``, rounded
-    down, shape (indices.size,), uint16."""
-    out = np.empty(indices.size, np.uint16)
-    for u in range(indptr.size - 1):
-        for e in range(indptr[u], indptr[u + 1]):
-            out[e] = min(65535, int(_l1(coords, node_cell[u], node_cell[indices[e]]) / quantum
-                                    + 1e-9))
-    return out
-
-
-@numba.njit(cache=True, nogil=True)
-def gate_distances(indptr, indices, quanta, quantum, first, stop, sources):
-    """Shortest distance [joint unit] from each node of one patch to any of
-    ``sources`` within the patch, along the node graph, with the edge
-    lengths of :func:`edge_quanta`.
-
-    Rounded down, every distance stays a lower bound of the true one and
-    drops by at most an edge's length along an edge; in whole quanta the
-    search is Dial's (a ring of buckets instead of a heap).  A grid's face
-    lengths are whole multiples of its smallest step, the quantum the
-    planner takes, so nothing is lost.
-
-    Parameters
-    ----------
-    quanta : ndarray of uint16, shape (indices.size,)
-    quantum : float
-        Length unit of ``quanta`` [joint unit].
-    first, stop : int
-        The patch's nodes are ``first .. stop - 1``.
-    sources : ndarray of int
-        Nodes of the patch at distance 0.
-
-    Returns
-    -------
-    ndarray of float64, shape (stop - first,)
-        Infinite where no source can be reached.
-    """
-    n = stop - first
-    unreached = np.iinfo(np.int64).max
-    distance = np.full(n, unreached, np.int64)
-    longest = 1
-    for e in range(indptr[first], indptr[stop]):
-        longest = max(longest, int(quanta[e]))
-    # Entries of the ring's buckets, as linked lists; a node enters once per
-    # improvement, so the edges bound the entries.
-    ring = longest + 1
-    head = np.full(ring, -1, np.int64)
-    capacity = sources.size + indptr[stop] - indptr[first]
-    entry_node = np.empty(capacity, np.int64)
-    entry_next = np.empty(capacity, np.int64)
-    entries = 0
-    for s in sources:
-        distance[s - first] = 0
-        entry_node[entries], entry_next[entries] = s, head[0]
-        head[0] = entries
-        entries += 1
-    pending = sources.size
-    level = 0
-    while pending > 0:
-        bucket = level % ring
-        while head[bucket] >= 0:
-            k = head[bucket]
-            head[bucket] = entry_next[k]
-            pending -= 1
-            u = entry_node[k]
-            if distance[u - first] != level:
-                continue  # a stale entry: u was reached closer since
-            for e in range(indptr[u], indptr[u + 1]):
-                v = indices[e]
-                if v < first or v >= stop:
-                    continue
-                reach = level + quanta[e]
-                if reach < distance[v - first]:
-                    distance[v - first] = reach
-                    slot = reach % ring
-                    entry_node[entries], entry_next[entries] = v, head[slot]
-                    head[slot] = entries
-                    entries += 1
-                    pending += 1
-        level += 1
-    out = np.empty(n)
-    for k in range(n):
-        out[k] = np.inf if distance[k] == unreached else distance[k] * quantum
-    return out
+def _is_blocked(blocked, cell):
+    k = np.searchsorted(blocked, cell)
+    return k < blocked.size and blocked[k] == cell
 
 
 @numba.njit(cache=True)
-def _estimate(coords, node_cell, node_patch, layer, to_gate, to_gate_start, rest, landmarks,
-              last, cost_floor, goal, v):
-    """The heuristic of node ``v`` (module doc)."""
-    length = _l1(coords, node_cell[v], goal)
+def _node_cost(node_cost, node_margin, clearance, penalty, u):
+    return node_cost[u] * penalty if node_margin[u] < clearance else node_cost[u]
+
+
+@numba.njit(cache=True)
+def _estimate(coords, quantum, node_cell, node_patch, layer, to_gate, to_gate_start, rest,
+              landmarks, last, cost_floor, goal, v):
+    """The heuristic of node ``v`` (module doc); 0 without a goal."""
+    if cost_floor == 0:
+        return 0
+    length = _half_quanta(coords, quantum, node_cell[v], goal)
     here = layer[node_patch[v]]
     if here < last:
         length = max(length, to_gate[to_gate_start[here] + v] + rest[here])
     else:
         at = v + to_gate_start[last]
         for j in range(landmarks.shape[0]):
-            length = max(length, abs(landmarks[j, at] - landmarks[j, -1]))
+            if landmarks[j, at] < UNREACHED and landmarks[j, -1] < UNREACHED:
+                length = max(length, abs(landmarks[j, at] - landmarks[j, -1]))
     return cost_floor * length
 
 
 @numba.njit(cache=True, nogil=True)
-def layered_astar(indptr, indices, node_cell, node_patch, node_cost, node_margin, clearance,
-                  penalty, coords, layer, source, target, blocked, cost_floor, to_gate,
-                  to_gate_start, rest, landmarks, g, pred, closed, touched):
+def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin, clearance,
+            penalty, coords, quantum, layer, sources, target, blocked, cost_floor, to_gate,
+            to_gate_start, rest, landmarks, g, pred, closed, touched):
+    """Least costs from ``sources`` through the layers, up to ``target`` (all
+    reachable nodes when it is -1); returns how many nodes it touched, which
+    are the first entries of ``touched``."""
+    goal = node_cell[target] if target >= 0 else 0
+    last = layer[node_patch[target]] if target >= 0 else 0
+    head = np.full(_RING, -1, np.int64)
+    capacity = max(1024, 2 * sources.size)
+    entry_node = np.empty(capacity, np.int64)
+    entry_next = np.empty(capacity, np.int64)
+    entries = 0
+    waiting_node = np.empty(64, np.int64)
+    waiting_key = np.empty(64, np.int64)
+    waiting = 0
+    n_touched = 0
+    for s in sources:
+        g[s] = 0
+        pred[s] = -1
+        touched[n_touched] = s
+        n_touched += 1
+        waiting_node[waiting] = s
+        waiting_key[waiting] = _estimate(coords, quantum, node_cell, node_patch, layer, to_gate,
+                                         to_gate_start, rest, landmarks, last, cost_floor,
+                                         goal, s)
+        waiting += 1
+        if waiting == waiting_node.size:
+            waiting_node = np.concatenate((waiting_node, np.empty(waiting, np.int64)))
+            waiting_key = np.concatenate((waiting_key, np.empty(waiting, np.int64)))
+    pending = 0
+    current = 0
+    taken_at = -1
+    while True:
+        if pending == 0:
+            if waiting == 0:
+                break
+            current = max(current, waiting_key[:waiting].min())
+        if current != taken_at and (pending == 0 or current % _RING == 0):
+            taken_at = current
+            # The ring holds the keys current .. current + _RING - 1: take
+            # the waiting ones that now fall in it.
+            kept = 0
+            for w in range(waiting):
+                if waiting_key[w] < current + _RING:
+                    if entries == capacity:
+                        capacity *= 2
+                        entry_node = np.concatenate((entry_node, np.empty(entries, np.int64)))
+                        entry_next = np.concatenate((entry_next, np.empty(entries, np.int64)))
+                    bucket = waiting_key[w] % _RING
+                    entry_node[entries], entry_next[entries] = waiting_node[w], head[bucket]
+                    head[bucket] = entries
+                    entries += 1
+                    pending += 1
+                else:
+                    waiting_node[kept], waiting_key[kept] = waiting_node[w], waiting_key[w]
+                    kept += 1
+            waiting = kept
+        bucket = current % _RING
+        if head[bucket] < 0:
+            current += 1
+            continue
+        k = head[bucket]
+        head[bucket] = entry_next[k]
+        pending -= 1
+        u = entry_node[k]
+        if closed[u]:
+            continue
+        closed[u] = 1
+        if u == target:
+            break
+        here = layer[node_patch[u]]
+        cost_u = _node_cost(node_cost, node_margin, clearance, penalty, u)
+        for e in range(indptr[u], indptr[u + 1]):
+            v = indices[e]
+            if closed[v]:
+                continue
+            there = layer[node_patch[v]]
+            if there < 0 or (there != here and there != here + 1):
+                continue
+            if blocked.size and _is_blocked(blocked, node_cell[v]):
+                continue
+            reach = g[u] + quanta[e] * (cost_u + _node_cost(node_cost, node_margin, clearance,
+                                                            penalty, v))
+            if reach < g[v]:
+                if g[v] == UNREACHED:
+                    touched[n_touched] = v
+                    n_touched += 1
+                g[v] = reach
+                pred[v] = u
+                # A consistent estimate never puts a key behind the current one.
+                key = max(current, reach + _estimate(
+                    coords, quantum, node_cell, node_patch, layer, to_gate, to_gate_start, rest,
+                    landmarks, last, cost_floor, goal, v))
+                if key < current + _RING:
+                    if entries == capacity:
+                        capacity *= 2
+                        entry_node = np.concatenate((entry_node, np.empty(entries, np.int64)))
+                        entry_next = np.concatenate((entry_next, np.empty(entries, np.int64)))
+                    bucket = key % _RING
+                    entry_node[entries], entry_next[entries] = v, head[bucket]
+                    head[bucket] = entries
+                    entries += 1
+                    pending += 1
+                else:
+                    if waiting == waiting_node.size:
+                        waiting_node = np.concatenate((waiting_node, np.empty(waiting, np.int64)))
+                        waiting_key = np.concatenate((waiting_key, np.empty(waiting, np.int64)))
+                    waiting_node[waiting], waiting_key[waiting] = v, key
+                    waiting += 1
+    return n_touched
+
+
+@numba.njit(cache=True)
+def _reset(g, closed, touched, n_touched):
+    for k in range(n_touched):
+        g[touched[k]] = UNREACHED
+        closed[touched[k]] = 0
+
+
+@numba.njit(cache=True, nogil=True)
+def gate_distances(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
+                   clearance, penalty, coords, quantum, n_patches, k, sources, g, pred, closed,
+                   touched):
+    """Least cost from each node of one patch to any of ``sources`` within the
+    patch, in the units of :func:`layered_astar`.
+
+    Taken with node costs of 1 (or ``penalty`` below ``clearance``), these
+    are lower bounds of the search's costs, after scaling by its smallest
+    node cost, and drop by at most an edge's cost along an edge.
+
+    Parameters
+    ----------
+    n_patches, k : int
+        Number of patches, index of this one; its nodes are those with
+        ``node_patch == k``, contiguous.
+    sources : ndarray of int
+        Nodes of the patch at cost 0.
+    node_cost : ndarray of int64, shape (n_nodes,)
+        1 on the patch's nodes.
+    g, pred, closed, touched :
+        Work arrays (:func:`layered_astar`).
+
+    Returns
+    -------
+    ndarray of int64, shape (patch nodes,)
+        :data:`UNREACHED` where no source can be reached.
+    """
+    first = np.searchsorted(node_patch, k)
+    stop = np.searchsorted(node_patch, k, side="right")
+    layer = np.full(n_patches, -1, np.int32)
+    layer[k] = 0
+    empty = np.zeros(0, np.int64)
+    n_touched = _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
+                        clearance, penalty, coords, quantum, layer, sources, -1, empty, 0,
+                        empty, empty, empty, np.zeros((0, 1), np.int64), g, pred, closed,
+                        touched)
+    out = g[first:stop].copy()
+    _reset(g, closed, touched, n_touched)
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def layered_astar(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
+                  clearance, penalty, coords, quantum, layer, source, target, blocked,
+                  cost_floor, to_gate, to_gate_start, rest, landmarks, g, pred, closed,
+                  touched):
     """Least-cost node path from ``source`` to ``target`` through the layers.
 
     Parameters
     ----------
     indptr, indices : ndarray
         The node graph (:func:`adjacency`).
+    quanta : ndarray of uint16, shape (indices.size,)
+        Edge lengths in quanta (:func:`edge_quanta`).
     node_cell : ndarray of int, shape (n_nodes,)
         Cell of each node.
     node_patch : ndarray of int32, shape (n_nodes,)
-        Index of each node's patch.
-    node_cost : ndarray of float64, shape (n_nodes,)
-        Cost per unit length of each node (needed on the path's patches).
+        Index of each node's patch, ascending.
+    node_cost : ndarray of int64, shape (n_nodes,)
+        Cost of each node in whole units (needed on the path's patches).
     node_margin : ndarray of float64, shape (n_nodes,)
         Margin magnitude of each node's solution.
-    clearance, penalty : float
+    clearance : float
+    penalty : int
         Nodes with a margin below ``clearance`` cost ``penalty`` times more.
     coords : ndarray of float64, shape (n_cells, d)
         Coordinates of the cells [joint unit].
+    quantum : float
+        The length of one quantum [joint unit].
     layer : ndarray of int32, shape (n_patches,)
         Position of each patch on the global path, -1 off it.
     source, target : int
         Nodes of the start cell (layer 0) and of the goal cell (last layer).
     blocked : ndarray of int64, shape (k,)
         Cells not to enter, ascending.
-    cost_floor : float
-        Smallest ``node_cost`` on the path's patches (scales the heuristic).
-    to_gate, to_gate_start, rest : ndarray of float64, int64, float64
-        Lengths [joint unit] for the layers before the last: a node ``v`` in
-        layer ``i`` is at least ``to_gate[to_gate_start[i] + v] + rest[i]``
-        from the target (:func:`gate_distances` of its patch to the next
-        gate, and the least such bound beyond that gate);
-        ``-to_gate_start[last]`` is the first node of the last layer.
-    landmarks : ndarray of float64, shape (k, n + 1)
+    cost_floor : int
+        Smallest ``node_cost`` on the path's patches (scales the heuristic),
+        at least 1.
+    to_gate, to_gate_start, rest : ndarray of int64
+        Costs for the layers before the last: a node ``v`` in layer ``i``
+        costs at least ``to_gate[to_gate_start[i] + v] + rest[i]`` to the
+        target (:func:`gate_distances` of its patch to the next gate, and
+        the least such bound beyond that gate); ``-to_gate_start[last]`` is
+        the first node of the last layer.
+    landmarks : ndarray of int64, shape (k, n + 1)
         :func:`gate_distances` of the last layer's patch (its ``n`` nodes) to
-        each of its gates, then of the target: by the triangle inequality,
-        within the patch a node is at least ``|landmarks[j, node] -
-        landmarks[j, -1]|`` from the target.
+        each of its gates, then of the target.
     g, pred, closed, touched : ndarray, shape (n_nodes,)
-        Work arrays: ``g`` all infinite and ``closed`` all zero on entry,
-        and so again on return.
+        Work arrays: ``g`` (int64) all :data:`UNREACHED` and ``closed``
+        (uint8) all zero on entry, and so again on return.
 
     Returns
     -------
     nodes : ndarray of int64
         The path, empty when the target cannot be reached.
-    cost : float
+    cost : int
+        Its cost: lengths in half quanta times node costs in units.
     """
-    capacity = 1024
-    key = np.empty(capacity)
-    tie = np.empty(capacity)
-    item = np.empty(capacity, np.int64)
-    goal = node_cell[target]
-    last = layer[node_patch[target]]
-    g[source] = 0.0
-    pred[source] = -1
-    touched[0] = source
-    n_touched = 1
-    key[0] = _estimate(coords, node_cell, node_patch, layer, to_gate, to_gate_start, rest,
-                       landmarks, last, cost_floor, goal, source)
-    tie[0] = 0.0
-    item[0] = source
-    size = 1
-    found = False
-    while size > 0:
-        u = item[0]
-        size -= 1
-        if size > 0:
-            key[0], tie[0], item[0] = key[size], tie[size], item[size]
-            _sift_down(key, tie, item, size)
-        if closed[u]:
-            continue
-        closed[u] = 1
-        if u == target:
-            found = True
-            break
-        here = layer[node_patch[u]]
-        cell = node_cell[u]
-        cost_u = _cost(node_cost, node_margin, clearance, penalty, u)
-        for e in range(indptr[u], indptr[u + 1]):
-            v = indices[e]
-            if closed[v]:
-                continue
-            there = layer[node_patch[v]]
-            if there != here and there != here + 1:
-                continue
-            other = node_cell[v]
-            if blocked.size and _is_blocked(blocked, other):
-                continue
-            reach = g[u] + 0.5 * _l1(coords, cell, other) * (
-                cost_u + _cost(node_cost, node_margin, clearance, penalty, v))
-            if reach < g[v]:
-                if g[v] == np.inf:
-                    touched[n_touched] = v
-                    n_touched += 1
-                g[v] = reach
-                pred[v] = u
-                if size == capacity:
-                    capacity *= 2
-                    key = np.concatenate((key, np.empty(size)))
-                    tie = np.concatenate((tie, np.empty(size)))
-                    item = np.concatenate((item, np.empty(size, np.int64)))
-                key[size] = reach + _estimate(coords, node_cell, node_patch, layer, to_gate,
-                                              to_gate_start, rest, landmarks, last, cost_floor,
-                                              goal, v)
-                tie[size] = -reach
-                item[size] = v
-                _sift_up(key, tie, item, size)
-                size += 1
+    sources = np.full(1, source, np.int64)
+    n_touched = _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
+                        clearance, penalty, coords, quantum, layer, sources, target, blocked,
+                        cost_floor, to_gate, to_gate_start, rest, landmarks, g, pred, closed,
+                        touched)
     cost = g[target]
     count = 0
-    if found:
+    if closed[target]:
         node = target
         while node >= 0:
             count += 1
@@ -361,7 +386,5 @@ def layered_astar(indptr, indices, node_cell, node_patch, node_cost, node_margin
     for k in range(count - 1, -1, -1):
         nodes[k] = node
         node = pred[node]
-    for k in range(n_touched):
-        g[touched[k]] = np.inf
-        closed[touched[k]] = 0
+    _reset(g, closed, touched, n_touched)
     return nodes, cost

@@ -9,9 +9,10 @@ passes there only where nothing else leads on, as next to a cusp or through
 a narrow gate.  The paper's cost, ``1 + clearance_weight / d`` with ``d`` the
 distance in cells to the nearest cell outside the patch (singular edge,
 gate, other region or grid edge alike; Euclidean on uniform grids, along
-faces on adaptive ones), is there too: a positive ``clearance_weight`` keeps
-paths clear of every boundary until they must cross the planned gate, at
-the price of longer paths.
+faces on adaptive ones), is there too, rounded up to eighths (the search
+counts in integers): a positive ``clearance_weight`` keeps paths clear of
+every boundary until they must cross the planned gate, at the price of
+longer paths.
 
 Rather than planning patch by patch to a chosen gate cell, the patches of a
 global path are the layers of one search: the nodes are the patches'
@@ -35,14 +36,18 @@ import threading
 
 import numpy as np
 
-from .astar import _l1, adjacency, edge_quanta, gate_distances, gate_nodes, layered_astar
+from .astar import (UNREACHED, _half_quanta, adjacency, edge_quanta, gate_distances,
+                    gate_nodes, layered_astar)
 from ..exceptions import InfeasiblePathError, InvalidInputError
 
 __all__ = ["LocalPlanner", "LocalPath", "DEFAULT_CLEARANCE_WEIGHT"]
 
 DEFAULT_CLEARANCE_WEIGHT = 0.0
-_LOW_MARGIN_FACTOR = 100.0
+_LOW_MARGIN_FACTOR = 100
 _UNRESOLVED_DEPTH = 0.5
+# The search's costs are integers (:mod:`~.astar`): the paper's cell cost
+# 1 + w / d is rounded up to whole eighths.
+_COST_UNITS = 8
 
 
 @dataclass(frozen=True)
@@ -93,7 +98,7 @@ class LocalPlanner:
             self._neighbours[position[a]].append(position[b])
             self._neighbours[position[b]].append(position[a])
         self._coords = np.ascontiguousarray(seg.field.grid.coordinates(), dtype=np.float64)
-        self._quantum = float(seg.field.grid.step)
+        self._quantum = _lattice_quantum(seg.field.grid.steps)
         self._quanta = edge_quanta(self._indptr, self._indices, self._node_cell, self._coords,
                                    self._quantum)
         self._node_margin = np.abs(seg.field.margin[self._node_cell, self._node_slot])
@@ -124,19 +129,29 @@ class LocalPlanner:
         return np.concatenate(a_all), np.concatenate(b_all)
 
     def _costed(self, weight, k):
-        """The node costs for a clearance weight, with those of the patch at
-        index ``k`` filled; and that patch's smallest."""
+        """The node costs for a clearance weight, in whole units, with those of
+        the patch at index ``k`` filled; and that patch's smallest."""
         if weight not in self._node_cost:
-            self._node_cost[weight] = np.ones(self._node_cell.size)
+            self._node_cost[weight] = np.ones(self._node_cell.size, dtype=np.int64)
         costs = self._node_cost[weight]
         pid = int(self._pids[k])
         if (weight, pid) not in self._cost_floor:
-            cost = 1.0
+            cost = np.ones(1, dtype=np.int64)
             if weight > 0:
-                cost = 1.0 + weight / self.clearance(pid)
+                cost = np.ceil(_COST_UNITS * (1.0 + weight / self.clearance(pid)))
                 costs[self._offsets[k]:self._offsets[k + 1]] = cost
-            self._cost_floor[weight, pid] = float(np.min(cost))
+            self._cost_floor[weight, pid] = int(np.min(cost))
         return costs, self._cost_floor[weight, pid]
+
+    def _borrow(self):
+        """Work arrays of a search (:func:`~.astar.layered_astar`): one set per
+        search at a time, kept for the next."""
+        try:
+            return self._work.get_nowait()
+        except queue.Empty:
+            n_nodes = self._node_cell.size
+            return (np.full(n_nodes, UNREACHED, np.int64), np.empty(n_nodes, np.int64),
+                    np.zeros(n_nodes, np.uint8), np.empty(n_nodes, np.int64))
 
     def _patch_nodes(self, k, other):
         """Nodes of the patch at index ``k`` joined to the patch at index ``other``."""
@@ -147,49 +162,57 @@ class LocalPlanner:
                 self._offsets[k + 1], other))
         return nodes
 
-    def _distances_to_gate(self, k, other):
+    def _distances_to_gate(self, k, other, clearance):
         """:func:`~.astar.gate_distances` of the patch at index ``k`` to its
         gate to ``other``."""
         # Computed without a lock: two threads may both compute one the first
         # time, and keep the same values.
-        distances = self._to_gate.get((k, other))
+        distances = self._to_gate.get((k, other, clearance))
         if distances is None:
-            distances = self._to_gate.setdefault((k, other), gate_distances(
-                self._indptr, self._indices, self._quanta, self._quantum, self._offsets[k],
-                self._offsets[k + 1], self._patch_nodes(k, other)))
+            work = self._borrow()
+            try:
+                distances = gate_distances(
+                    self._indptr, self._indices, self._quanta, self._node_cell,
+                    self._node_patch, self._costed(0.0, k)[0], self._node_margin, clearance,
+                    _LOW_MARGIN_FACTOR, self._coords, self._quantum, self._pids.size, k,
+                    self._patch_nodes(k, other), *work)
+            finally:
+                self._work.put(work)
+            distances = self._to_gate.setdefault((k, other, clearance), distances)
         return distances
 
-    def _heuristic(self, index, target):
+    def _heuristic(self, index, target, clearance):
         """``to_gate``, ``to_gate_start``, ``rest`` and ``landmarks`` of
         :func:`~.astar.layered_astar` for the patches at ``index``, the layers
         in order, and the target node."""
-        fields = [self._distances_to_gate(k, m) for k, m in zip(index, index[1:])]
+        fields = [self._distances_to_gate(k, m, clearance) for k, m in zip(index, index[1:])]
         last, goal_cell = index[-1], self._node_cell[target]
         first = self._offsets[last]
         starts = np.cumsum([0] + [f.size for f in fields]) - self._offsets[index]
         starts[-1] = -first
         landmarks = np.array(
             [np.append(field, field[target - first]) for field in (
-                self._distances_to_gate(last, other) for other in self._neighbours[last])],
-            dtype=float).reshape(-1, self._offsets[last + 1] - first + 1)
-        rest = np.zeros(len(index))
+                self._distances_to_gate(last, other, clearance)
+                for other in self._neighbours[last])],
+            dtype=np.int64).reshape(-1, self._offsets[last + 1] - first + 1)
+        rest = np.zeros(len(index), dtype=np.int64)
         if len(index) > 1:
             entry = self._patch_nodes(index[-1], index[-2])
-            rest[-2] = min(_l1(self._coords, c, goal_cell)
+            rest[-2] = min(_half_quanta(self._coords, self._quantum, c, goal_cell)
                            for c in self._node_cell[entry].tolist())
         for i in range(len(index) - 3, -1, -1):
             entry = self._patch_nodes(index[i + 1], index[i]) - self._offsets[index[i + 1]]
-            rest[i] = rest[i + 1] + float(np.min(fields[i + 1][entry]))
-        return (np.concatenate(fields + [np.zeros(0)]), starts.astype(np.int64), rest,
+            rest[i] = rest[i + 1] + int(np.min(fields[i + 1][entry]))
+        return (np.concatenate(fields + [np.zeros(0, np.int64)]), starts.astype(np.int64), rest,
                 landmarks)
 
-    def prepare(self):
-        """Compute every patch's distances to each of its gates now rather
-        than on first use (a few tenths of a second for the paper's roadmap,
-        seconds for the full 3-DOF one)."""
+    def prepare(self, clearance):
+        """Compute every patch's costs to each of its gates for a clearance
+        now rather than on first use (a few tenths of a second for the
+        paper's roadmap, seconds for the full 3-DOF one)."""
         for k, others in enumerate(self._neighbours):
             for other in others:
-                self._distances_to_gate(k, other)
+                self._distances_to_gate(k, other, float(clearance))
 
     def cells_around(self, point, radius):
         """Cells within ``radius`` grid steps of a point along every axis.
@@ -285,23 +308,32 @@ class LocalPlanner:
             costed = [self._costed(key[0], k) for k in index]
         costs = costed[0][0]
         floor = min(f for _, f in costed)
-        heuristic = self._heuristic(index, target)
-        try:
-            work = self._work.get_nowait()
-        except queue.Empty:
-            n_nodes = self._node_cell.size
-            work = (np.full(n_nodes, np.inf), np.empty(n_nodes, np.int64),
-                    np.zeros(n_nodes, np.uint8), np.empty(n_nodes, np.int64))
+        heuristic = self._heuristic(index, target, key[1])
+        work = self._borrow()
         try:
             nodes, cost = layered_astar(
-                self._indptr, self._indices, self._node_cell, self._node_patch, costs,
-                self._node_margin, key[1], _LOW_MARGIN_FACTOR, self._coords, layer, source,
-                target, blocked, floor, *heuristic, *work)
+                self._indptr, self._indices, self._quanta, self._node_cell, self._node_patch,
+                costs, self._node_margin, key[1], _LOW_MARGIN_FACTOR, self._coords,
+                self._quantum, layer, source, target, blocked, floor, *heuristic, *work)
         finally:
             # layered_astar leaves its work arrays as it found them.
             self._work.put(work)
+        # Lengths in half quanta, node costs in units: back to length times cost.
+        cost = float(cost) * self._quantum / 2 / (_COST_UNITS if key[0] > 0 else 1)
         if nodes.size == 0:
             raise InfeasiblePathError(f"no local path through patches {patches}")
         return LocalPath(cells=self._node_cell[nodes],
                          patches=self._pids[self._node_patch[nodes]],
-                         slots=self._node_slot[nodes], cost=float(cost))
+                         slots=self._node_slot[nodes], cost=cost)
+
+
+def _lattice_quantum(steps, most=16):
+    """The longest length of which every step is a whole multiple: the
+    smallest step divided by 1, 2, ... up to ``most`` (then lengths round
+    down to that last one)."""
+    smallest = min(steps)
+    for divisor in range(1, most + 1):
+        quantum = smallest / divisor
+        if all(abs(s / quantum - round(s / quantum)) < 1e-9 * s / quantum for s in steps):
+            return quantum
+    return smallest / most

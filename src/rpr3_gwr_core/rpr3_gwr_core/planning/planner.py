@@ -34,9 +34,9 @@ DEFAULT_CLEARANCE = 2e-2
 _SAMPLES_PER_CELL = 5
 # Local re-plans around steps the validator refused, per global path and weight.
 _REPAIRS = 4
-# Shortcuts the validator refused that are put back one by one before the
-# whole cell path is.
-_RESTORED_SHORTCUTS = 3
+# Shortcuts the validator refused that are split into shorter ones, one by
+# one, before the whole cell path is restored.
+_RESTORED_SHORTCUTS = 6
 # The paper's clearance weight (1 + w / d per cell), for paths that keep to
 # the middle of their patches when the shortest ones cannot be repaired.
 _DETOUR_WEIGHT = 10.0
@@ -328,9 +328,10 @@ class Planner:
 
     def _shortcut_validated(self, joints, patches, s, g, clearance, keep):
         """The shortcut path's validation and kept waypoints; a shortcut the
-        validator refuses is put back to the cell path's waypoints it
-        replaced, a few times, then all of them.  A failure is then one of
-        the cell path's own steps."""
+        validator refuses is replaced by shorter ones over the same cells (the
+        stretch shortcut again without its direct jump), a few times, then
+        the cell path is restored whole.  A failure is then one of the cell
+        path's own steps."""
         kept = np.arange(len(joints))
         if len(joints) > 2:
             kept = self._shortcut(joints, patches, clearance)
@@ -339,9 +340,11 @@ class Planner:
             k = result.failed_segment
             if result.ok or k < 1 or kept[k] - kept[k - 1] == 1:
                 break
-            restored = np.arange(kept[k - 1] + 1, kept[k])
+            a, b = kept[k - 1], kept[k]
+            restored = a + self._shortcut(joints[a:b + 1], patches[a:b + 1], clearance,
+                                          split=True)
             if attempt == _RESTORED_SHORTCUTS:
-                restored, k = np.setdiff1d(np.arange(len(joints)), kept), 0
+                restored = np.arange(len(joints))
             kept = np.union1d(kept, restored)
         return result, kept
 
@@ -403,9 +406,10 @@ class Planner:
             np.asarray(patches, dtype=np.int64), np.asarray(floors, dtype=float),
             _SAMPLES_PER_CELL, grid.step, grid.lattice, seg.patch, seg.field.margin)
 
-    def _shortcut(self, joints, patches, clearance):
+    def _shortcut(self, joints, patches, clearance, split=False):
         """Indices of the waypoints kept when each patch's stretch is shortcut
-        by straight segments (gate crossings stay in place)."""
+        by straight segments (gate crossings stay in place); with ``split``,
+        the jump from the first waypoint straight to the last is not allowed."""
         margins = self._waypoint_margins(joints, patches)
         # A segment from waypoint i may reach the end of i's run in its patch.
         changes = np.flatnonzero(np.diff(patches) != 0)
@@ -415,6 +419,8 @@ class Planner:
 
         def allowed(i, js):
             ok = js <= run_end[i]
+            if split and i == 0:
+                ok &= js < len(joints) - 1
             if ok.any():
                 lowest = np.minimum.accumulate(positive[i:js.max() + 1])[js - i]
                 ok[ok] = self._clear(joints[np.full(ok.sum(), i)], joints[js[ok]],
