@@ -210,8 +210,10 @@ class PlannerNode(Node):
             response.min_singularity_margin = float(plan.validation.min_margin)
         response.success = True
         response.error_code = PlanPath.Response.ERROR_NONE
-        if not options.feasibility_only:
+        # Converting messages for no one would cost every request.
+        if not options.feasibility_only and self.trajectory_pub.get_subscription_count():
             self.trajectory_pub.publish(response.trajectory)
+        if not options.feasibility_only and self.marker_pub.get_subscription_count():
             self.marker_pub.publish(path_markers(state.planner.roadmap.grid, plan.joints,
                                                  plan.poses, response.trajectory.header.stamp))
         return response

@@ -155,8 +155,9 @@ class Mechanism(abc.ABC):
 
         Returns
         -------
-        (numba dispatcher, ndarray) or None
-            A function compiled for :data:`STEP_KERNEL_SIGNATURE` and the
+        (first-class function, ndarray) or None
+            A function compiled for :data:`STEP_KERNEL_SIGNATURE` (a numba
+            dispatcher, or better its ``CompileResultWAP``) and the
             ``parameters`` array it takes; None (the default) makes the
             validator call :meth:`step` from the interpreter.
         """

@@ -41,6 +41,7 @@ import math
 import numbers
 
 import numba
+from numba.core.types.function_type import CompileResultWAP
 from numba.extending import register_jitable
 import numpy as np
 
@@ -223,7 +224,10 @@ class Geometry(Mechanism):
 
     @functools.cached_property
     def step_kernel(self):
-        return _step_kernel, np.array([*self.parameters, self.scale])
+        # Its address taken once: passing the dispatcher itself would look it
+        # up, under numba's compiler lock, at every call.
+        compiled = CompileResultWAP(_step_kernel.overloads[STEP_KERNEL_SIGNATURE.args])
+        return compiled, np.array([*self.parameters, self.scale])
 
     def refine_cusp(self, pose, fixed):
         if set(fixed) != {0}:
