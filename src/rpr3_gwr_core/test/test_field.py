@@ -8,6 +8,8 @@ from rpr3_gwr_core.paper import PAPER_GRID, rho1_slice
 from rpr3_gwr_core.workspace import Grid, compute_field
 from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY
 from rpr3_gwr_core.mechanisms.rpr3 import MAX_SOLUTIONS, direct_kinematics, singularity_margin
+from rpr3_gwr_core.mechanisms import rpr3
+from rpr3_gwr_core.mechanisms.trig_roots import sampled_roots
 
 
 @pytest.fixture(scope="module")
@@ -83,7 +85,106 @@ def test_field_margin_is_the_singularity_margin(small_field):
                                singularity_margin(small_field.poses[valid]))
 
 
+def test_field_separation_is_the_distance_to_the_nearest_other_solution(small_field):
+    separation = small_field.separation
+    for cell in range(small_field.grid.size):
+        poses = small_field.poses[cell, :small_field.count[cell]]
+        distance = PAPER_GEOMETRY.pose_distance(poses[None, :, :], poses[:, None, :])
+        np.fill_diagonal(distance, np.inf)
+        np.testing.assert_array_equal(separation[cell, :len(poses)], distance.min(axis=1))
+    assert np.all(np.isnan(separation[~small_field.valid]))
+    assert not separation.flags.writeable and not small_field.valid.flags.writeable
+
+
 def test_field_aspect_is_the_sign_of_margin_and_zero_where_none(small_field):
     valid = small_field.valid
     np.testing.assert_array_equal(small_field.aspect[valid], np.sign(small_field.margin[valid]))
     assert np.all(small_field.aspect[~valid] == 0)
+
+
+# The fast path of the field: sampling proves most cells' roots simple and
+# polishes them; only the rest go through the sextic's companion matrix.
+
+def _full_sextic_field(monkeypatch, grid):
+    """The field with every cell solved by the companion matrix."""
+    with monkeypatch.context() as patch:
+        patch.setattr(rpr3, "sampled_roots", lambda coeffs, samples, slots: (
+            np.zeros(len(coeffs), dtype=bool), np.full((len(coeffs), slots), np.nan)))
+        return compute_field(PAPER_GEOMETRY, grid)
+
+
+def _assert_same_field(fast, full):
+    np.testing.assert_array_equal(fast.count, full.count)
+    valid = full.valid
+    np.testing.assert_array_equal(np.isnan(fast.poses), np.isnan(full.poses))
+    np.testing.assert_array_equal(fast.aspect, full.aspect)
+    np.testing.assert_allclose(fast.margin[valid], full.margin[valid], rtol=0, atol=1e-8)
+    # Near a degenerate orientation the pose's position amplifies the last
+    # digits of alpha, where the companion matrix is the less accurate of the
+    # two: raw poses agree to 1e-7, and one Newton step takes both to the
+    # same pose within 1e-9.
+    np.testing.assert_allclose(fast.poses[valid], full.poses[valid], rtol=0, atol=1e-7)
+    joints = full.grid.joints()[np.nonzero(valid)[0]]
+    polished = [PAPER_GEOMETRY.correct(f.poses[valid], joints, 1) for f in (fast, full)]
+    np.testing.assert_allclose(PAPER_GEOMETRY.pose_difference(*polished), 0.0, atol=1e-9)
+
+
+def test_fast_field_equals_the_full_sextic_on_the_paper_slice(monkeypatch):
+    fast = compute_field(PAPER_GEOMETRY, PAPER_GRID)
+    _assert_same_field(fast, _full_sextic_field(monkeypatch, PAPER_GRID))
+    assert np.bincount(fast.count, minlength=7)[[2, 4, 6]].min() > 1000
+
+
+def test_fast_field_equals_the_full_sextic_on_a_3d_grid(monkeypatch):
+    grid = Grid.regular({0: (1.0, 49.0), 1: (0.0, 50.0), 2: (0.0, 50.0)}, 1.5)
+    _assert_same_field(compute_field(PAPER_GEOMETRY, grid), _full_sextic_field(monkeypatch, grid))
+
+
+def test_sampling_settles_all_but_cells_near_the_singular_locus():
+    rho = PAPER_GRID.joints()
+    coeffs = rpr3._equation7_coefficients(rho[:, 0], rho[:, 1], rho[:, 2], PAPER_GEOMETRY)
+    certified, _ = sampled_roots(coeffs, 64, MAX_SOLUTIONS)
+    assert np.count_nonzero(~certified) < 0.01 * certified.size
+
+
+def _trig_values(coeffs, phi):
+    degree = (coeffs.shape[-1] - 1) // 2
+    basis = [np.ones_like(phi)]
+    for k in range(1, degree + 1):
+        basis += [np.cos(k * phi), np.sin(k * phi)]
+    return coeffs @ np.array(basis)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.floats(-1.0, 1.0), min_size=7, max_size=7))
+def test_sampled_roots_are_all_the_real_roots_when_certified(coefficients):
+    coeffs = np.array([coefficients])
+    certified, roots = sampled_roots(coeffs, 64, MAX_SOLUTIONS)
+    if not certified[0]:
+        return
+    found = roots[0][np.isfinite(roots[0])]
+    assert np.all(np.diff(found) > 0) and np.all(np.abs(found) <= np.pi)
+    np.testing.assert_allclose(_trig_values(coeffs[0], found), 0.0, atol=1e-12)
+    # Every sign change of a fine sampling is one of the roots found.
+    phi = np.linspace(-np.pi, np.pi, 20001)
+    values = _trig_values(coeffs[0], phi)
+    changes = phi[:-1][np.sign(values[:-1]) != np.sign(values[1:])]
+    assert changes.size == found.size
+    np.testing.assert_allclose(changes, found, atol=2 * np.pi / 20000)
+
+
+def test_roots_close_to_merging_are_left_to_the_full_sextic():
+    # cos(phi) - 1 + c has a double root at phi = 0 for c = 0, two real roots
+    # +-4.5e-5 for c = 1e-9 and two complex ones 4.5e-5 off the real axis for
+    # c = -1e-9: all three are left to the companion matrix.  cos(2 phi) - 1/2
+    # crosses zero four times.
+    coeffs = np.array([[-1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                       [-1.0 + 1e-9, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                       [-1.0 - 1e-9, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                       [-0.5, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]])
+    certified, roots = sampled_roots(coeffs, 64, MAX_SOLUTIONS)
+    assert certified.tolist() == [False, False, False, True]
+    assert np.all(np.isnan(roots[:3]))
+    np.testing.assert_allclose(roots[3, :4], [-5 * np.pi / 6, -np.pi / 6, np.pi / 6,
+                                              5 * np.pi / 6])
+    assert np.all(np.isnan(roots[3, 4:]))

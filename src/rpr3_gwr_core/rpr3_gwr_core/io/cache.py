@@ -26,7 +26,7 @@ from .export import FORMAT, VERSION, roadmap_arrays, roadmap_from_arrays
 __all__ = ["default_cache_dir", "cache_key", "cached_roadmap"]
 
 # Bump when a change of the algorithms changes roadmaps, so old entries are not reused.
-ALGORITHM_REVISION = 3
+ALGORITHM_REVISION = 4
 
 
 def default_cache_dir():

@@ -30,9 +30,11 @@ trigonometric polynomial of degree 3 in alpha (its degree-4 harmonics cancel),
 i.e. the classic sextic.  Its seven Fourier coefficients are linear in
 ``(u**2, u v, v**2, u, v, 1, rho1**2)`` with ``u = rho2**2 - rho1**2`` and
 ``v = rho3**2 - rho1**2``, so they cost one small matrix product per batch of
-configurations; the roots come from the eigenvalues of a companion matrix in
-``t = tan((alpha - alpha0) / 2)``, ``alpha0`` chosen per configuration so that
-no root sits near ``t = inf``.
+configurations.  A compiled sampler (:mod:`.trig_roots`) proves most
+configurations' roots simple and polishes them; only those whose roots come
+close to merging, near the singular locus or a degenerate orientation, take
+the eigenvalues of a companion matrix in ``t = tan((alpha - alpha0) / 2)``,
+``alpha0`` chosen per configuration so that no root sits near ``t = inf``.
 """
 
 from dataclasses import dataclass
@@ -47,6 +49,7 @@ import numpy as np
 
 from ..exceptions import InvalidInputError
 from .base import STEP_KERNEL_SIGNATURE, Mechanism, register_mechanism
+from .trig_roots import sampled_roots
 
 __all__ = [
     "Geometry",
@@ -699,7 +702,6 @@ def _tan_half_matrix():
 
 
 _TAN_HALF = _tan_half_matrix()
-_HARMONICS = np.array([0, 1, 1, 2, 2, 3, 3])
 
 
 def _trig_basis(phi):
@@ -730,18 +732,17 @@ def _shift(coeffs, alpha0):
 
 def _real_roots(coeffs):
     """Real roots of trigonometric cubics, shape (n, 6) [rad], NaN-padded."""
-    n = coeffs.shape[0]
-    roots = np.full((n, MAX_SOLUTIONS), np.nan)
-    h = 2 * np.pi / _SAMPLES
-    phi = h * np.arange(_SAMPLES)
-    values = coeffs @ _trig_basis(phi)
-    # Between two samples f stays above their chord minus |f''| h**2 / 8, and
-    # |f''| <= sum k**2 (|a_k| + |b_k|): a row whose samples all stay farther
-    # than that from zero, on one side, has no root at all.
-    reach = np.abs(coeffs) @ (_HARMONICS**2).astype(float) * (h * h / 8)
-    maybe = np.flatnonzero(~((values.min(axis=1) > reach) | (values.max(axis=1) < -reach)))
-    if maybe.size:
-        roots[maybe] = np.sort(_companion_roots(coeffs[maybe], phi, values[maybe]), axis=1)
+    # Sampling settles most rows, those whose roots are simple and apart;
+    # only where roots come close to merging (near the singular locus) does
+    # it take every root of the sextic.
+    certified, roots = sampled_roots(coeffs, _SAMPLES, MAX_SOLUTIONS)
+    hard = np.flatnonzero(~certified)
+    if hard.size:
+        h = 2 * np.pi / _SAMPLES
+        phi = h * np.arange(_SAMPLES)
+        coeffs = coeffs[hard]
+        values = coeffs @ _trig_basis(phi)
+        roots[hard] = np.sort(_companion_roots(coeffs, phi, values), axis=1)
     return roots
 
 

@@ -140,15 +140,6 @@ def _track_both_ways(field, joints, lower, upper):
     return np.where(agree, forward, -1).astype(np.int8)
 
 
-def _nearest_other(field, cells, slots):
-    """Distance (:meth:`Mechanism.pose_distance`) from solution ``slots`` of
-    ``cells`` to the nearest other solution of the same cell."""
-    here = field.poses[cells, slots]
-    dist = field.mechanism.pose_distance(field.poses[cells], here[:, None, :])
-    dist[np.arange(cells.size), slots] = np.inf
-    return np.min(np.where(np.isnan(dist), np.inf, dist), axis=1)
-
-
 def _screened(field, joints, lower, upper):
     """Faces whose links are surely the identity on the ordered solutions."""
     mechanism = field.mechanism
@@ -161,7 +152,7 @@ def _screened(field, joints, lower, upper):
         pose = mechanism.predict(field.poses[src[rows], slots], joints[src[rows]],
                                  joints[dst[rows]])
         err = mechanism.pose_distance(field.poses[dst[rows], slots], pose) / scale
-        gap = _nearest_other(field, dst[rows], slots) / scale
+        gap = field.separation[dst[rows], slots] / scale
         bad |= ~(err < _SCREEN_TOL) | ~(gap > _SCREEN_RATIO * err)
     unsure = np.zeros(same.size, dtype=bool)
     unsure[rows[bad]] = True

@@ -8,6 +8,7 @@ configuration space, or a slice of it (paper section 5: rho2, rho3 in
 
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+import functools
 import os
 
 import numpy as np
@@ -52,10 +53,30 @@ class NSolutionField:
         """``sign(margin)`` of each solution, shape (n_cells, max_solutions), 0 where none."""
         return np.nan_to_num(np.sign(self.margin)).astype(np.int8)
 
-    @property
+    @functools.cached_property
     def valid(self):
-        """Mask of existing solutions, shape (n_cells, max_solutions)."""
-        return np.arange(self.max_solutions) < self.count[:, None]
+        """Mask of existing solutions, shape (n_cells, max_solutions), read-only."""
+        # Continuity and segmentation ask for it dozens of times per field.
+        mask = np.arange(self.max_solutions) < self.count[:, None]
+        mask.flags.writeable = False
+        return mask
+
+    @functools.cached_property
+    def separation(self):
+        """Distance (:meth:`Mechanism.pose_distance`) from each solution to the
+        nearest other solution of its cell, shape (n_cells, max_solutions),
+        read-only: inf for a cell's only solution, NaN beyond ``count``."""
+        # Per cell once, rather than per face and direction by continuity.
+        out = np.where(self.valid, np.inf, np.nan)
+        for slot in range(self.max_solutions):
+            for other in range(self.max_solutions):
+                if other != slot:
+                    both = np.flatnonzero(self.count > max(slot, other))
+                    distance = self.mechanism.pose_distance(self.poses[both, other],
+                                                            self.poses[both, slot])
+                    out[both, slot] = np.minimum(out[both, slot], distance)
+        out.flags.writeable = False
+        return out
 
 
 def compute_field(mechanism, grid):
@@ -89,7 +110,8 @@ def compute_field(mechanism, grid):
     margin = np.full((grid.size, n), np.nan)
 
     # Chunks bound the temporaries of the root finder (they scale with cells)
-    # and keep every core busy: numpy and LAPACK release the GIL.
+    # and keep every core busy: numpy, LAPACK and the mechanisms' compiled
+    # kernels release the GIL.
     def solve(start):
         part = slice(start, start + _CHUNK)
         count[part], poses[part] = mechanism.solve(joints[part])
