@@ -77,3 +77,31 @@ def test_a_roadmap_message_that_disagrees_with_its_field_is_refused(built):
     roadmap_msg.gates = roadmap_msg.gates[1:]
     with pytest.raises(InvalidInputError):
         roadmap_from_msgs(field_msg, roadmap_msg)
+
+
+def _truncated(values):
+    return values[:-1]
+
+
+@pytest.mark.parametrize("damage", [
+    lambda m: setattr(m, "poses", _truncated(m.poses)),
+    lambda m: setattr(m, "singularity_margin", _truncated(m.singularity_margin)),
+    lambda m: setattr(m, "patch_ids", _truncated(m.patch_ids)),
+    lambda m: setattr(m, "n_solutions", _truncated(m.n_solutions)),
+    lambda m: m.n_solutions.__setitem__(0, 7),
+    lambda m: setattr(m.links[0], "slots", _truncated(m.links[0].slots)),
+])
+def test_a_field_message_of_the_wrong_sizes_is_refused(built, damage):
+    """Per-solution arrays hold the solutions n_solutions counts, no more."""
+    field_msg, roadmap_msg = roadmap_to_msgs(built, Header())
+    damage(field_msg)
+    with pytest.raises(InvalidInputError):
+        roadmap_from_msgs(field_msg, roadmap_msg)
+
+
+def test_the_field_message_lists_only_existing_solutions(built):
+    field_msg, _ = roadmap_to_msgs(built, Header())
+    total = int(built.field.count.sum())
+    assert len(field_msg.singularity_margin) == len(field_msg.patch_ids) == total
+    assert len(field_msg.poses) == 3 * total
+    assert not np.isnan(np.frombuffer(field_msg.poses)).any()

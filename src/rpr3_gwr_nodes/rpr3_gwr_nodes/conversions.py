@@ -1,11 +1,13 @@
 """Conversions between rpr3_gwr_core values and rpr3_gwr_msgs messages.
 
-Large per-cell arrays travel as ``array.array`` built from numpy buffers, the
-fast path of the generated setters (a list would be checked element by
-element), and come back with ``numpy.frombuffer``.  A roadmap travels as its
-field's arrays; patches and gates are derived from them on arrival by the
-core's one decoder (``Segmentation.from_arrays``), and the roadmap message's
-summary must agree.
+Large per-cell arrays travel as ``array.array`` filled from numpy buffers,
+the fast path of the generated setters (a list would be checked element by
+element), and come back with ``numpy.frombuffer``; per-solution arrays hold
+only the solutions that exist (a third of the slots of the full 3-DOF
+roadmap, whose field message is then about 150 MB instead of 390).  A roadmap
+travels as its field's arrays; patches and gates are derived from them on
+arrival by the core's one decoder (``Segmentation.from_arrays``), and the
+roadmap message's summary must agree.
 """
 
 import array
@@ -50,7 +52,7 @@ def duration_msg(seconds):
 
 def _pack(typecode, values, dtype):
     out = array.array(typecode)
-    out.frombytes(np.ascontiguousarray(values, dtype=dtype).tobytes())
+    out.frombytes(memoryview(np.ascontiguousarray(values, dtype=dtype)).cast("B"))
     return out
 
 
@@ -124,11 +126,12 @@ def roadmap_to_msgs(roadmap, header):
     field_msg = NSolutionFieldMsg(header=header, geometry=geometry, grid=grid,
                                   max_solutions=field.max_solutions,
                                   pose_size=field.mechanism.pose_size)
+    valid = field.valid
     field_msg.n_solutions = _pack("B", field.count, np.uint8)
     field_msg.region_ids = _pack("i", seg.region, np.int32)
-    field_msg.patch_ids = _pack("i", seg.patch, np.int32)
-    field_msg.poses = _pack("d", field.poses, np.float64)
-    field_msg.singularity_margin = _pack("d", field.margin, np.float64)
+    field_msg.patch_ids = _pack("i", seg.patch[valid], np.int32)
+    field_msg.poses = _pack("d", field.poses[valid], np.float64)
+    field_msg.singularity_margin = _pack("d", field.margin[valid], np.float64)
     field_msg.links = [AxisLinks(slots=_pack("b", match, np.int8)) for _, _, match in seg.links]
     field_msg.cusps = [CuspMsg(legs=[float(v) for v in c.joints],
                                pose=PlatformPose(x=float(c.pose[0]), y=float(c.pose[1]),
@@ -165,21 +168,27 @@ def roadmap_from_msgs(field_msg, roadmap_msg):
                                 f"{field_msg.pose_size} coordinates, the mechanism has "
                                 f"{slots} of {size}")
     n = grid.size
-    # Views of the message's buffers (they keep the message's arrays alive):
-    # the full roadmap's poses alone are 240 MB.
-    field = NSolutionField(
-        mechanism=geometry, grid=grid,
-        count=_unpack(field_msg.n_solutions, np.uint8, n, "n_solutions"),
-        poses=_unpack(field_msg.poses, np.float64, n * slots * size, "poses").reshape(
-            n, slots, size),
-        margin=_unpack(field_msg.singularity_margin, np.float64, n * slots,
-                       "singularity_margin").reshape(n, slots))
+    count = _unpack(field_msg.n_solutions, np.uint8, n, "n_solutions")
+    if count.max(initial=0) > slots:
+        raise InvalidInputError(f"field message: a cell has {count.max()} solutions, the "
+                                f"mechanism at most {slots}")
+    valid = np.arange(slots) < count[:, None]
+    total = int(count.sum(dtype=np.int64))
+    poses = np.full((n, slots, size), np.nan)
+    poses[valid] = _unpack(field_msg.poses, np.float64, total * size, "poses").reshape(-1, size)
+    margin = np.full((n, slots), np.nan)
+    margin[valid] = _unpack(field_msg.singularity_margin, np.float64, total,
+                            "singularity_margin")
+    patch = np.zeros((n, slots), np.int32)
+    patch[valid] = _unpack(field_msg.patch_ids, np.int32, total, "patch_ids")
+    field = NSolutionField(mechanism=geometry, grid=grid, count=count, poses=poses,
+                           margin=margin)
+    if any(len(axis.slots) % slots for axis in field_msg.links):
+        raise InvalidInputError(f"field message: links are not {slots} per face")
     links = [np.frombuffer(axis.slots, np.int8).reshape(-1, slots) if len(axis.slots)
              else np.zeros((0, slots), np.int8) for axis in field_msg.links]
     segmentation = Segmentation.from_arrays(
-        field, _unpack(field_msg.region_ids, np.int32, n, "region_ids"),
-        _unpack(field_msg.patch_ids, np.int32, n * slots, "patch_ids").reshape(n, slots),
-        links)
+        field, _unpack(field_msg.region_ids, np.int32, n, "region_ids"), patch, links)
     if ({p.id for p in roadmap_msg.patches} != set(segmentation.patches)
             or {(g.patch_a, g.patch_b) for g in roadmap_msg.gates} != set(segmentation.gates)):
         raise InvalidInputError("the roadmap message's patches and gates do not match its field")

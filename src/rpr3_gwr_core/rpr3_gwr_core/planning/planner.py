@@ -188,6 +188,9 @@ class Planner:
         self.min_margin = float(min_margin)
         self.max_step = float(max_step)
         self._joints = roadmap.grid.joints()
+        self._free = list(roadmap.grid.axis_joints)
+        self._step = roadmap.grid.step
+        self._lattice = roadmap.grid.lattice
 
     def locate(self, configuration, mode_tol=DEFAULT_MODE_TOL):
         """:func:`~rpr3_gwr_core.planning.locate.locate` of a configuration:
@@ -333,15 +336,16 @@ class Planner:
         the cell path is restored whole.  A failure is then one of the cell
         path's own steps."""
         kept = np.arange(len(joints))
+        margins = self._waypoint_margins(joints, patches)
         if len(joints) > 2:
-            kept = self._shortcut(joints, patches, clearance)
+            kept = self._shortcut(joints, patches, margins, clearance)
         for attempt in range(_RESTORED_SHORTCUTS + 2):
             result = self._validate(joints[kept], s, g, keep)
             k = result.failed_segment
             if result.ok or k < 1 or kept[k] - kept[k - 1] == 1:
                 break
-            a, b = kept[k - 1], kept[k]
-            restored = a + self._shortcut(joints[a:b + 1], patches[a:b + 1], clearance,
+            a, b = kept[k - 1], kept[k] + 1
+            restored = a + self._shortcut(joints[a:b], patches[a:b], margins[a:b], clearance,
                                           split=True)
             if attempt == _RESTORED_SHORTCUTS:
                 restored = np.arange(len(joints))
@@ -398,19 +402,18 @@ class Planner:
         -------
         ndarray of bool, shape (len(starts),)
         """
-        grid, seg = self.roadmap.grid, self.roadmap.segmentation
-        free = list(grid.axis_joints)
+        seg = self.roadmap.segmentation
         return segments_clear(
-            np.ascontiguousarray(np.asarray(starts)[:, free]),
-            np.ascontiguousarray(np.asarray(ends)[:, free]),
+            np.ascontiguousarray(np.asarray(starts)[:, self._free]),
+            np.ascontiguousarray(np.asarray(ends)[:, self._free]),
             np.asarray(patches, dtype=np.int64), np.asarray(floors, dtype=float),
-            _SAMPLES_PER_CELL, grid.step, grid.lattice, seg.patch, seg.field.margin)
+            _SAMPLES_PER_CELL, self._step, self._lattice, seg.patch, seg.field.margin)
 
-    def _shortcut(self, joints, patches, clearance, split=False):
+    def _shortcut(self, joints, patches, margins, clearance, split=False):
         """Indices of the waypoints kept when each patch's stretch is shortcut
         by straight segments (gate crossings stay in place); with ``split``,
-        the jump from the first waypoint straight to the last is not allowed."""
-        margins = self._waypoint_margins(joints, patches)
+        the jump from the first waypoint straight to the last is not allowed.
+        ``margins`` are the waypoints' (:meth:`_waypoint_margins`)."""
         # A segment from waypoint i may reach the end of i's run in its patch.
         changes = np.flatnonzero(np.diff(patches) != 0)
         run_end = np.append(changes, len(patches) - 1)[np.searchsorted(changes, np.arange(
