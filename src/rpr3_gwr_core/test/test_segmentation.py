@@ -8,12 +8,16 @@ import numpy as np
 import pytest
 
 from gwr_cases import OTHER_GEOMETRY, nearest_slot
+from rpr3_gwr_core.exceptions import InvalidInputError
+from rpr3_gwr_core.workspace import continuity, segmentation
 from rpr3_gwr_core.workspace.continuity import match_solutions, neighbour_pairs
 from rpr3_gwr_core.paper import rho1_slice
 from rpr3_gwr_core.workspace import compute_field
+from rpr3_gwr_core.workspace.adaptive import refine
+from rpr3_gwr_core.workspace.grid import Grid
 from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY
 from rpr3_gwr_core.workspace.roadmap import aspect_groups, build_roadmap, roadmap_graph
-from rpr3_gwr_core.workspace.segmentation import segment
+from rpr3_gwr_core.workspace.segmentation import Segmentation, segment
 
 STRUCTURAL_CASES = ["paper", "paper_rho17_step0.25", "paper_rho13_step0.25",
                     "paper_rho30_step0.25", "other_rho10.1_step0.25"]
@@ -355,3 +359,162 @@ def test_other_geometry_rho1_10_segments_without_error():
     grid = rho1_slice(rho1=10.0, rho2_range=(0.0, 30.0), rho3_range=(0.0, 30.0), step=0.5)
     seg = segment(compute_field(OTHER_GEOMETRY, grid))
     assert seg.n_regions > 1
+
+
+# --- compiled stages against their plain numpy forms --------------------------------------------
+
+@pytest.fixture(scope="module")
+def adaptive_case():
+    """(field, segmentation) on a small refined 3-D grid."""
+    base = Grid.regular({0: (12.0, 20.0), 1: (10.0, 18.0), 2: (16.0, 24.0)}, 1.0)
+    field = compute_field(PAPER_GEOMETRY, refine(PAPER_GEOMETRY, base, 4))
+    return field, segment(field)
+
+
+def _reference_decode(field, region, patch, links):
+    """Patches and gates of :meth:`Segmentation.from_arrays` in plain numpy,
+    as ``{id: (region, layer, aspect, n_solutions, cells, slots, gate_cells,
+    singular_cells)}`` and ``{(a, b): (faces, width)}``."""
+    n, width = patch.shape
+    linked = []
+    for lo, up, match in links:
+        rows, slots = np.nonzero(match >= 0)
+        lower, upper, target = lo[rows], up[rows], match[rows, slots].astype(np.int64)
+        into = (patch[lower, slots] > 0) & (patch[upper, target] > 0)
+        linked.append((rows[into], lower[into], slots[into], upper[into], target[into]))
+    faces = np.zeros(n, dtype=np.int64)
+    continued = np.zeros(n * width, dtype=np.int64)
+    on_gate = np.zeros(n * width, dtype=bool)
+    for (lo, up, _), (_, lower, lower_slot, upper, upper_slot) in zip(links, linked):
+        faces += np.bincount(lo, minlength=n) + np.bincount(up, minlength=n)
+        keys = np.concatenate([lower * width + lower_slot, upper * width + upper_slot])
+        continued += np.bincount(keys, minlength=n * width)
+        crossing = patch[lower, lower_slot] != patch[upper, upper_slot]
+        on_gate[lower[crossing] * width + lower_slot[crossing]] = True
+        on_gate[upper[crossing] * width + upper_slot[crossing]] = True
+    on_singular = field.valid & (patch > 0) & (continued.reshape(n, width) < faces[:, None])
+    on_gate = on_gate.reshape(n, width)
+    patches, layers = {}, {}
+    for pid in np.unique(patch[patch > 0]).tolist():
+        cells, slots = np.nonzero(patch == pid)
+        own = int(region[cells].max())
+        layers.setdefault(own, []).append(pid)
+        (aspect,) = np.unique(np.sign(field.margin[cells, slots]).astype(int))
+        patches[pid] = (own, len(layers[own]), aspect,
+                        int(field.count[cells[region[cells] == own][0]]), cells, slots,
+                        cells[on_gate[cells, slots]], cells[on_singular[cells, slots]])
+    gates = {}
+    for measures, (rows, ca, sa, cb, sb) in zip(field.grid.face_measures(), linked):
+        for k in np.flatnonzero(patch[ca, sa] != patch[cb, sb]):
+            a, b, fa, fb = patch[ca[k], sa[k]], patch[cb[k], sb[k]], ca[k], cb[k]
+            if a > b:
+                a, b, fa, fb = b, a, fb, fa
+            faces_so_far, width_so_far = gates.get((int(a), int(b)), ([], 0.0))
+            gates[(int(a), int(b))] = (faces_so_far + [(fa, fb)], width_so_far + measures[rows[k]])
+    return patches, {key: (np.array(sorted(f), dtype=np.int64).reshape(-1, 2), w)
+                     for key, (f, w) in sorted(gates.items())}
+
+
+def _check_decode(field, seg):
+    patches, gates = _reference_decode(field, seg.region, seg.patch, seg.links)
+    assert list(seg.patches) == list(patches)
+    for pid, (region, layer, aspect, n_solutions, *arrays) in patches.items():
+        patch = seg.patches[pid]
+        assert (patch.region, patch.layer, patch.aspect, patch.n_solutions) == (
+            region, layer, aspect, n_solutions)
+        for name, expected in zip(("cells", "slots", "gate_cells", "singular_cells"), arrays):
+            np.testing.assert_array_equal(getattr(patch, name), expected)
+    assert list(seg.gates) == list(gates)
+    for key, (faces, width) in gates.items():
+        np.testing.assert_array_equal(seg.gates[key].faces, faces)
+        assert seg.gates[key].width == pytest.approx(width, rel=1e-12)
+
+
+def test_decoded_patches_and_gates_match_the_numpy_reference(case):
+    field, seg, _ = case
+    _check_decode(field, seg)
+
+
+def test_decoded_patches_and_gates_match_the_numpy_reference_on_an_adaptive_grid(adaptive_case):
+    _check_decode(*adaptive_case)
+
+
+def test_adaptive_pairs_match_the_numpy_reference(adaptive_case):
+    grid = adaptive_case[0].grid
+    rank = np.full(math.prod(grid.fine_shape), -1, dtype=np.int64)
+    rank[grid._index] = np.arange(grid.size)
+    multi = np.stack(np.unravel_index(grid._index, grid.fine_shape), axis=1)
+    for axis, (lower, upper) in enumerate(grid.pairs()):
+        stride = math.prod(grid.fine_shape[axis + 1:])
+        expected = np.full(grid.size, -1, dtype=np.int64)
+        for step in range(grid.refinement, 0, -1):
+            ahead = multi[:, axis] + step < grid.fine_shape[axis]
+            found = np.full(grid.size, -1, dtype=np.int64)
+            found[ahead] = rank[grid._index[ahead] + step * stride]
+            expected = np.where(found >= 0, found, expected)
+        np.testing.assert_array_equal(lower, np.flatnonzero(expected >= 0))
+        np.testing.assert_array_equal(upper, expected[expected >= 0])
+
+
+def test_patch_numbering_matches_the_whole_array_assignment(cases):
+    field = cases.field("paper_rho17_step0.25")
+    seg = cases.segmentation("paper_rho17_step0.25")
+    linked = [segmentation._linked_disks(lo, up, m) for lo, up, m in seg.links]
+    disk_links = segmentation._within_region_links(field, seg.region, linked)
+    valid = (field.valid & (seg.region[:, None] > 0)).ravel()
+    component = segmentation._components_by_csgraph(valid, disk_links, valid.size)
+    got = segmentation._number_patches(field, seg.region, component, disk_links)
+    component = component.reshape(got.shape)
+    expected = np.zeros(got.shape, dtype=np.int32)
+    for r in range(1, seg.n_regions + 1):
+        cells = np.flatnonzero(seg.region == r)
+        labels = np.unique(component[cells][component[cells] >= 0])
+        first = [np.flatnonzero(component[cells[0]] == label)[0] for label in labels]
+        order = sorted(range(labels.size), key=lambda k: (field.aspect[cells[0], first[k]],
+                                                           first[k]))
+        for layer, k in enumerate(order, start=1):
+            expected[component == labels[k]] = 10 * r + layer
+    np.testing.assert_array_equal(got, expected)
+
+
+def test_linked_disks_are_the_nonzero_links(case):
+    field, seg, _ = case
+    n = field.max_solutions
+    for lo, up, match in seg.links:
+        rows, slots = np.nonzero(match >= 0)
+        a, b = segmentation._linked_disks(lo, up, match)
+        np.testing.assert_array_equal(a, lo[rows] * n + slots)
+        np.testing.assert_array_equal(b, up[rows] * n + match[rows, slots])
+
+
+def test_matching_tracks_the_same_links_as_chunk_by_chunk(cases, monkeypatch):
+    field = cases.field("other_rho10.1_step0.25")
+    joints = field.grid.joints()
+    monkeypatch.setattr(continuity, "_CHUNK", 997)
+    for lower, upper in field.grid.pairs():
+        expected = np.full((lower.size, field.max_solutions), -1, dtype=np.int8)
+        for start in range(0, lower.size, 997):
+            lo, up = lower[start:start + 997], upper[start:start + 997]
+            settled = continuity._screened(field, joints, lo, up)
+            part = expected[start:start + 997]
+            part[settled] = np.where(field.valid[lo[settled]], np.arange(field.max_solutions), -1)
+            todo = np.flatnonzero(~settled)
+            part[todo] = continuity._track_both_ways(field, joints, lo[todo], up[todo])
+        np.testing.assert_array_equal(match_solutions(field, lower, upper), expected)
+
+
+@pytest.mark.parametrize("change", [-1, 10 ** 6])
+def test_decoding_refuses_patch_ids_outside_the_regions(cases, change):
+    seg = cases.segmentation("paper_rho17_step0.25")
+    patch = seg.patch.copy()
+    patch[np.flatnonzero(seg.region)[0], 0] = change
+    with pytest.raises(InvalidInputError):
+        Segmentation.from_arrays(seg.field, seg.region, patch, [m for _, _, m in seg.links])
+
+
+def test_decoding_refuses_links_to_no_slot(cases):
+    seg = cases.segmentation("paper_rho17_step0.25")
+    links = [m.copy() for _, _, m in seg.links]
+    links[0][0, 0] = seg.field.max_solutions
+    with pytest.raises(InvalidInputError):
+        Segmentation.from_arrays(seg.field, seg.region, seg.patch, links)

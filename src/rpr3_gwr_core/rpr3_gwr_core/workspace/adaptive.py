@@ -42,6 +42,7 @@ import itertools
 import math
 import numbers
 
+import numba
 import numpy as np
 from scipy import sparse
 from scipy.sparse.csgraph import dijkstra
@@ -176,29 +177,13 @@ class AdaptiveGrid(GridBase):
         """Face-adjacent cell pairs (module doc), one ``(lower, upper)`` pair of
         cell arrays per axis, ``lower`` before ``upper`` along the axis."""
         if self._pairs is None:
-            rank = np.full(math.prod(self.fine_shape), -1, dtype=np.int64)
+            # int32 halves the table: a grid has far fewer than 2**31 cells.
+            rank = np.full(math.prod(self.fine_shape), -1, dtype=np.int32)
             rank[self._index] = np.arange(self.size)
-            multi = self._multi()
-            self._pairs = [self._axis_pairs(axis, rank, multi[:, axis])
+            self._pairs = [_axis_pairs(self._index, rank, math.prod(self.fine_shape[axis + 1:]),
+                                       self.fine_shape[axis], self.refinement)
                            for axis in range(self.ndim)]
         return [(lower, upper) for lower, upper, _ in self._pairs]
-
-    def _axis_pairs(self, axis, rank, position):
-        """Each cell and the next cell along ``axis`` within a base step;
-        ``rank`` maps fine flat indices to cells (-1 none), ``position`` is
-        each cell's fine index along the axis."""
-        stride = math.prod(self.fine_shape[axis + 1:])
-        upper = np.full(self.size, -1, dtype=np.int64)
-        gap = np.zeros(self.size, dtype=np.int64)
-        for step in range(self.refinement, 0, -1):
-            # Nearest last: the nearest next cell along the line wins.
-            ahead = position + step < self.fine_shape[axis]
-            found = np.full(self.size, -1, dtype=np.int64)
-            found[ahead] = rank[self._index[ahead] + step * stride]
-            upper = np.where(found >= 0, found, upper)
-            gap = np.where(found >= 0, step, gap)
-        lower = np.flatnonzero(upper >= 0)
-        return lower, upper[lower], gap[lower]
 
     def _gaps(self):
         self.pairs()
@@ -324,6 +309,28 @@ class AdaptiveGrid(GridBase):
             return cls(Grid.from_dict(data["base"]), data["refinement"], data["blocks"])
         except (KeyError, TypeError, ValueError) as exc:
             raise InvalidInputError(f"malformed adaptive grid: {exc}") from exc
+
+
+@numba.njit(cache=True, nogil=True)
+def _axis_pairs(index, rank, stride, length, refinement):
+    """Each cell and the next cell along an axis within a base step, and their
+    distance in fine steps: ``(lower, upper, gap)``.
+
+    ``index`` holds the cells' fine flat indices, ``rank`` maps fine flat
+    indices to cells (-1 none), ``stride`` and ``length`` are the axis's on
+    the fine lattice."""
+    upper = np.full(index.size, -1, dtype=np.int64)
+    gap = np.zeros(index.size, dtype=np.int64)
+    for cell in range(index.size):
+        position = (index[cell] // stride) % length
+        # Nearest first: the nearest next cell along the line wins.
+        for step in range(1, min(refinement, length - 1 - position) + 1):
+            other = rank[index[cell] + step * stride]
+            if other >= 0:
+                upper[cell], gap[cell] = other, step
+                break
+    lower = np.flatnonzero(upper >= 0)
+    return lower, upper[lower], gap[lower]
 
 
 def _corner_sums(boxes):

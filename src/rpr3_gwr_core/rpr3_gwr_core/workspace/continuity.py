@@ -111,23 +111,22 @@ def match_solutions(field, lower, upper, screen=True):
     lower, upper = np.asarray(lower), np.asarray(upper)
     match = np.full((len(lower), field.max_solutions), -1, dtype=np.int8)
     # Faces are independent: chunks bound the temporaries, which scale with faces.
-    for start in range(0, len(lower), _CHUNK):
-        part = slice(start, start + _CHUNK)
-        match[part] = _match_chunk(field, joints, lower[part], upper[part], screen)
-    return match
-
-
-def _match_chunk(field, joints, lower, upper, screen):
-    match = np.full((len(lower), field.max_solutions), -1, dtype=np.int8)
     if screen:
-        settled = _screened(field, joints, lower, upper)
+        settled = np.zeros(len(lower), dtype=bool)
+        for start in range(0, len(lower), _CHUNK):
+            part = slice(start, start + _CHUNK)
+            settled[part] = _screened(field, joints, lower[part], upper[part])
         match[settled] = np.where(field.valid[lower[settled]], np.arange(field.max_solutions),
                                   -1)
         todo = np.flatnonzero(~settled)
     else:
         todo = np.arange(len(lower))
-    if todo.size:
-        match[todo] = _track_both_ways(field, joints, lower[todo], upper[todo])
+    # A link needs a solution at both ends; the faces left are tracked
+    # together, so the few solutions that need substeps take few calls.
+    todo = todo[(field.count[lower[todo]] > 0) & (field.count[upper[todo]] > 0)]
+    for start in range(0, todo.size, _CHUNK):
+        part = todo[start:start + _CHUNK]
+        match[part] = _track_both_ways(field, joints, lower[part], upper[part])
     return match
 
 

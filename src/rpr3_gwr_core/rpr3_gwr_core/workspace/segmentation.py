@@ -53,6 +53,7 @@ give identical patches, gates and boundaries.
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field as dataclass_field
 
+import numba
 import numpy as np
 import scipy.sparse as sparse
 from scipy.sparse.csgraph import breadth_first_order, connected_components
@@ -171,7 +172,8 @@ class Segmentation:
         Raises
         ------
         InvalidInputError
-            If the arrays do not fit the field's grid.
+            If the arrays do not fit the field's grid, a link names no slot
+            or a patch id is negative or past the regions'.
         """
         n, slots = field.grid.size, field.max_solutions
         pairs = field.grid.pairs()
@@ -182,10 +184,18 @@ class Segmentation:
             raise InvalidInputError("region, patch and link arrays do not fit the field's grid")
         links = [(lo, up, np.asarray(m, dtype=np.int8)) for (lo, up), m in zip(pairs, links)]
         region, patch = region.astype(np.int32), patch.astype(np.int32)
-        linked = _linked_solutions(patch, links)
+        # The compiled passes index by slot and by id unchecked: links must
+        # name slots, and ids be what the module doc makes them, below the
+        # next region's first id.
+        if any(m.size and (m.min() < -1 or m.max() >= slots) for _, _, m in links):
+            raise InvalidInputError("links must be -1 or a solution slot")
+        if patch.size and (patch.min() < 0 or patch.max() >= _id_base(field) * (
+                int(region.max(initial=0)) + 1)):
+            raise InvalidInputError("patch ids must be region * 10**k + layer of the regions")
+        tally = _tally_faces(field, patch, links)
         return cls(field=field, region=region, patch=patch,
-                   patches=_describe_patches(field, region, patch, links, linked),
-                   gates=_gates(field, patch, linked), links=links)
+                   patches=_describe_patches(field, region, patch, *tally[:3]),
+                   gates=_gates(field, tally[3]), links=links)
 
 
 def segment(field, method="components", min_region_cells=8):
@@ -213,7 +223,8 @@ def segment(field, method="components", min_region_cells=8):
         matches = list(pool.map(lambda pair: match_solutions(field, *pair), pairs))
     links = [(lo, up, match) for (lo, up), match in zip(pairs, matches)]
     region = _regions(field, links, int(min_region_cells))
-    disk_links = _within_region_links(field, region, links)
+    linked = [_linked_disks(lo, up, match) for lo, up, match in links]
+    disk_links = _within_region_links(field, region, linked)
     n_disks = field.grid.size * field.max_solutions
     valid = (field.valid & (region[:, None] > 0)).ravel()
     if method == "rds":
@@ -221,7 +232,7 @@ def segment(field, method="components", min_region_cells=8):
     else:
         component = _components_by_csgraph(valid, disk_links, n_disks)
     patch = _absorb_unresolved(field, region,
-                               _number_patches(field, region, component, disk_links), links)
+                               _number_patches(field, region, component, disk_links), linked)
     return Segmentation.from_arrays(field, region, patch, [m for _, _, m in links])
 
 
@@ -250,15 +261,34 @@ def _regions(field, links, min_cells):
     return np.where(occupied, renumber[label], 0).astype(np.int32)
 
 
-def _within_region_links(field, region, links):
+@numba.njit(cache=True, nogil=True)
+def _linked_disks(lower, upper, match):
+    """The solutions one axis's links join, as disks ``cell * max_solutions +
+    slot``: ``(lower disks, upper disks)``, face by face, slot by slot."""
+    width = match.shape[1]
+    total = 0
+    for k in range(match.shape[0]):
+        for i in range(width):
+            total += match[k, i] >= 0
+    a = np.empty(total, dtype=np.int64)
+    b = np.empty(total, dtype=np.int64)
+    j = 0
+    for k in range(match.shape[0]):
+        for i in range(width):
+            if match[k, i] >= 0:
+                a[j] = lower[k] * width + i
+                b[j] = upper[k] * width + match[k, i]
+                j += 1
+    return a, b
+
+
+def _within_region_links(field, region, linked):
     """Per axis, the (lower, upper) disks linked inside one region."""
     out = []
     n = field.max_solutions
-    for lo, up, match in links:
-        rows, slots = np.nonzero(match >= 0)
-        same = (region[lo[rows]] == region[up[rows]]) & (region[lo[rows]] > 0)
-        rows, slots = rows[same], slots[same]
-        out.append((lo[rows] * n + slots, up[rows] * n + match[rows, slots].astype(np.int64)))
+    for a, b in linked:
+        same = (region[a // n] == region[b // n]) & (region[a // n] > 0)
+        out.append((a[same], b[same]))
     return out
 
 
@@ -288,11 +318,15 @@ def _number_patches(field, region, component, disk_links):
     """Patch id of every disk from its component label (rule in module doc)."""
     n_cells = field.grid.size
     component = component.reshape(n_cells, field.max_solutions)
-    patch = np.zeros((n_cells, field.max_solutions), dtype=np.int32)
     aspect = field.aspect
-    base = 10 ** len(str(field.max_solutions))
+    base = _id_base(field)
+    # Component labels of the regions' disks are distinct (links stay inside
+    # a region), so one table from label to patch id numbers every disk.
+    patch_of_label = {}
+    by_region = np.argsort(region, kind="stable")
+    bounds = np.searchsorted(region[by_region], np.arange(1, int(region.max(initial=0)) + 2))
     for r in range(1, int(region.max(initial=0)) + 1):
-        cells = np.flatnonzero(region == r)
+        cells = by_region[bounds[r - 1]:bounds[r]]
         labels = np.unique(component[cells][component[cells] >= 0])
         reference = cells[0]
         if labels.size < field.count[reference]:
@@ -304,8 +338,15 @@ def _number_patches(field, region, component, disk_links):
             keys.append((aspect[reference, slots[0]], slots[0]))
         order = sorted(range(len(labels)), key=lambda k: keys[k])
         for layer, k in enumerate(order, start=1):
-            patch[component == labels[k]] = base * r + layer
-    return patch
+            patch_of_label[int(labels[k])] = base * r + layer
+    table = np.zeros(int(component.max(initial=-1)) + 2, dtype=np.int32)
+    table[np.fromiter(patch_of_label, dtype=np.int64) + 1] = list(patch_of_label.values())
+    return table[component + 1]
+
+
+def _id_base(field):
+    """``10**k`` of the patch ids (module doc)."""
+    return 10 ** len(str(field.max_solutions))
 
 
 def _cut_sheets(field, cells, component, disk_links):
@@ -341,16 +382,14 @@ def _cut_sheets(field, cells, component, disk_links):
     return out
 
 
-def _absorb_unresolved(field, region, patch, links):
+def _absorb_unresolved(field, region, patch, linked):
     """Patch ids for the solutions of unresolved cells (rule in module doc)."""
     unresolved = (field.valid & (region[:, None] == 0)).ravel()
     if not unresolved.any():
         return patch
     n = field.max_solutions
-    ends = [(lo[rows] * n + slots, up[rows] * n + match[rows, slots].astype(np.int64))
-            for lo, up, match in links for rows, slots in [np.nonzero(match >= 0)]]
-    a = np.concatenate([a for a, _ in ends])
-    b = np.concatenate([b for _, b in ends])
+    a = np.concatenate([a for a, _ in linked])
+    b = np.concatenate([b for _, b in linked])
     inner = unresolved[a] & unresolved[b]
     graph = sparse.coo_matrix((np.ones(int(inner.sum()), dtype=np.int8), (a[inner], b[inner])),
                               shape=(patch.size, patch.size))
@@ -382,83 +421,145 @@ def _absorb_unresolved(field, region, patch, links):
     return out
 
 
-def _linked_solutions(patch, links):
-    """Per axis, the linked patch solutions of each face: ``(rows, lower,
-    lower_slot, upper, upper_slot)``, ``rows`` indexing the axis's faces."""
-    out = []
-    for lo, up, match in links:
-        rows, slots = np.nonzero(match >= 0)
-        lower, upper = lo[rows], up[rows]
-        target = match[rows, slots].astype(np.int64)
-        into = (patch[lower, slots] > 0) & (patch[upper, target] > 0)
-        out.append((rows[into], lower[into], slots[into], upper[into], target[into]))
-    return out
-
-
-def _describe_patches(field, region, patch, links, linked):
+def _tally_faces(field, patch, links):
+    """Each cell's number of faces, each patch solution's number of links into
+    a patch and whether one of them is a gate, and the gate crossings
+    (:func:`_tally_axis`) of all axes, in axis order."""
     n, width = patch.shape
-    # A patch solution is on its singular boundary where one of its cell's
-    # faces does not continue it into a patch: it has fewer such links than
-    # its cell has faces.
     faces = np.zeros(n, dtype=np.int64)
-    continued = np.zeros(n * width, dtype=np.int64)
-    on_gate = np.zeros(n * width, dtype=bool)
-    for (lo, up, _), (_, lower, lower_slot, upper, upper_slot) in zip(links, linked):
-        faces += np.bincount(lo, minlength=n) + np.bincount(up, minlength=n)
-        keys = np.concatenate([lower * width + lower_slot, upper * width + upper_slot])
-        continued += np.bincount(keys, minlength=n * width)
-        crossing = patch[lower, lower_slot] != patch[upper, upper_slot]
-        on_gate[lower[crossing] * width + lower_slot[crossing]] = True
-        on_gate[upper[crossing] * width + upper_slot[crossing]] = True
-    on_singular = field.valid & (patch > 0) & (continued.reshape(n, width) < faces[:, None])
-    on_gate = on_gate.reshape(n, width)
+    continued = np.zeros((n, width), dtype=np.int64)
+    on_gate = np.zeros((n, width), dtype=np.bool_)
+    crossings = [_tally_axis(lo, up, match, patch, faces, continued, on_gate)
+                 for lo, up, match in links]
+    return faces, continued, on_gate, crossings
 
-    cells_all, slots_all = np.nonzero(patch)
-    ids = patch[cells_all, slots_all]
-    order = np.argsort(ids, kind="stable")
-    ids, cells_all, slots_all = ids[order], cells_all[order], slots_all[order]
-    bounds = np.flatnonzero(np.diff(ids)) + 1
+
+@numba.njit(cache=True, nogil=True)
+def _tally_axis(lower, upper, match, patch, faces, continued, on_gate):
+    """Add one axis's faces to ``faces``, its links between patch solutions to
+    ``continued`` and mark ``on_gate`` those between two patches; returns
+    these crossings, face by face, slot by slot, as rows ``(face, lower cell,
+    upper cell, lower patch, upper patch)``."""
+    out = np.empty((1024, 5), dtype=np.int64)
+    used = 0
+    for k in range(match.shape[0]):
+        lo, up = lower[k], upper[k]
+        faces[lo] += 1
+        faces[up] += 1
+        for i in range(match.shape[1]):
+            j = match[k, i]
+            if j < 0 or patch[lo, i] <= 0 or patch[up, j] <= 0:
+                continue
+            continued[lo, i] += 1
+            continued[up, j] += 1
+            if patch[lo, i] == patch[up, j]:
+                continue
+            on_gate[lo, i] = True
+            on_gate[up, j] = True
+            if used == out.shape[0]:
+                grown = np.empty((2 * used, 5), dtype=np.int64)
+                grown[:used] = out
+                out = grown
+            out[used, 0], out[used, 1], out[used, 2] = k, lo, up
+            out[used, 3], out[used, 4] = patch[lo, i], patch[up, j]
+            used += 1
+    return out[:used].copy()
+
+
+@numba.njit(cache=True, nogil=True)
+def _group_patches(patch, region, valid, margin, faces, continued, on_gate):
+    """The solutions of each patch id present, ascending: ``(ids, starts,
+    cells, slots, gate, singular, aspect, mixed, own, first_own)``.
+
+    Patch ``k`` owns entries ``starts[k]:starts[k + 1]`` of ``cells`` (in
+    ascending order), ``slots`` and the flags ``gate`` and ``singular``; its
+    aspect is the sign of its first solution's margin, ``mixed`` whether
+    another has another sign, ``own`` its largest region and ``first_own``
+    its first cell of that region."""
+    n, width = patch.shape
+    count = np.zeros(patch.max() + 1, dtype=np.int64)
+    for c in range(n):
+        for s in range(width):
+            count[patch[c, s]] += 1
+    count[0] = 0
+    ids = np.flatnonzero(count)
+    starts = np.zeros(ids.size + 1, dtype=np.int64)
+    starts[1:] = np.cumsum(count[ids])
+    cursor = np.zeros(count.size, dtype=np.int64)
+    cursor[ids] = starts[:-1]
+    total = starts[-1]
+    cells = np.empty(total, dtype=np.int64)
+    slots = np.empty(total, dtype=np.int64)
+    gate = np.empty(total, dtype=np.bool_)
+    singular = np.empty(total, dtype=np.bool_)
+    # Indexed by id until the end.
+    aspect = np.zeros(count.size, dtype=np.int64)
+    mixed = np.zeros(count.size, dtype=np.bool_)
+    own = np.full(count.size, -1, dtype=np.int64)
+    first_own = np.zeros(count.size, dtype=np.int64)
+    for c in range(n):
+        for s in range(width):
+            p = patch[c, s]
+            if p == 0:
+                continue
+            sign = 1 if margin[c, s] > 0 else (-1 if margin[c, s] < 0 else 0)
+            if own[p] < 0:
+                aspect[p] = sign
+            elif sign != aspect[p]:
+                mixed[p] = True
+            if region[c] > own[p]:
+                own[p], first_own[p] = region[c], c
+            j = cursor[p]
+            cursor[p] += 1
+            cells[j], slots[j], gate[j] = c, s, on_gate[c, s]
+            # On its singular boundary where one of its cell's faces does not
+            # continue it into a patch.
+            singular[j] = valid[c, s] and continued[c, s] < faces[c]
+    return (ids, starts, cells, slots, gate, singular, aspect[ids], mixed[ids], own[ids],
+            first_own[ids])
+
+
+def _describe_patches(field, region, patch, faces, continued, on_gate):
+    ids, starts, cells_all, slots_all, gate, singular, aspect, mixed, own, first_own = (
+        _group_patches(patch, region, field.valid, field.margin, faces, continued, on_gate))
     patches = {}
     layers = {}
-    for cells, slots in zip(np.split(cells_all, bounds), np.split(slots_all, bounds)):
-        if cells.size == 0:
-            continue
-        pid = int(patch[cells[0], slots[0]])
-        aspects = np.unique(np.sign(field.margin[cells, slots]).astype(int))
-        if aspects.size != 1:
+    for k, pid in enumerate(ids.tolist()):
+        part = slice(starts[k], starts[k + 1])
+        cells, slots = cells_all[part], slots_all[part]
+        if mixed[k]:
+            aspects = np.unique(np.sign(field.margin[cells, slots]).astype(int))
             raise InvalidInputError(f"patch {pid} mixes aspects {aspects}")
         # Its own cells share its region; cells it took from unresolved sets have 0.
-        own = int(region[cells].max())
-        layers.setdefault(own, []).append(pid)
+        layers.setdefault(int(own[k]), []).append(pid)
         patches[pid] = Patch(
-            id=pid, region=own, layer=len(layers[own]), aspect=int(aspects[0]),
-            n_solutions=int(field.count[cells[region[cells] == own][0]]), cells=cells,
-            slots=slots, gate_cells=cells[on_gate[cells, slots]],
-            singular_cells=cells[on_singular[cells, slots]])
+            id=pid, region=int(own[k]), layer=len(layers[int(own[k])]), aspect=int(aspect[k]),
+            n_solutions=int(field.count[first_own[k]]), cells=cells, slots=slots,
+            gate_cells=cells[gate[part]], singular_cells=cells[singular[part]])
     return patches
 
 
-def _gates(field, patch, linked):
-    first, second, cells_first, cells_second, measure = [], [], [], [], []
-    for measures, (rows, ca, slot_a, cb, slot_b) in zip(field.grid.face_measures(), linked):
-        a, b = patch[ca, slot_a], patch[cb, slot_b]
-        crossing = a != b
-        a, b, ca, cb = a[crossing], b[crossing], ca[crossing], cb[crossing]
-        swap = a > b
-        first.append(np.where(swap, b, a))
-        second.append(np.where(swap, a, b))
-        cells_first.append(np.where(swap, cb, ca))
-        cells_second.append(np.where(swap, ca, cb))
-        measure.append(measures[rows][crossing])
-    first, second, cells_first, cells_second, measure = (
-        np.concatenate(x) for x in (first, second, cells_first, cells_second, measure))
-    keys, gate = np.unique(np.stack([first, second], axis=1), axis=0, return_inverse=True)
-    gate = gate.ravel()
+def _gates(field, crossings):
+    """Gates from the crossings of :func:`_tally_faces`."""
+    measure = np.concatenate([measures[rows] for measures, rows in
+                              zip(field.grid.face_measures(), (c[:, 0] for c in crossings))])
+    _, ca, cb, a, b = np.concatenate(crossings).T
+    swap = a > b
+    first, second = np.where(swap, b, a), np.where(swap, a, b)
+    cells_first, cells_second = np.where(swap, cb, ca), np.where(swap, ca, cb)
+    top = int(second.max(initial=0)) + 1
+    key = first * top + second
+    # Grouped by gate, each gate's faces ascending.
+    order = np.lexsort((cells_second, cells_first, key))
+    head = np.ones(key.size, dtype=bool)
+    head[1:] = key[order][1:] != key[order][:-1]
+    keys = key[order][head]
+    gate = np.empty(key.size, dtype=np.int64)
+    gate[order] = np.cumsum(head) - 1
     # Summed in the order the faces were met, as a running sum would.
     widths = np.bincount(gate, weights=measure, minlength=len(keys))
-    order = np.lexsort((cells_second, cells_first, gate))
-    bounds = np.searchsorted(gate[order], np.arange(1, len(keys)))
-    faces = np.split(np.stack([cells_first, cells_second], axis=1)[order].astype(np.int64),
-                     bounds)
-    return {(int(a), int(b)): Gate(patches=(int(a), int(b)), faces=f, width=float(w))
-            for (a, b), f, w in zip(keys, faces, widths)}
+    faces = np.split(np.stack([cells_first, cells_second], axis=1)[order],
+                     np.flatnonzero(head)[1:])
+    return {(int(k // top), int(k % top)): Gate(patches=(int(k // top), int(k % top)), faces=f,
+                                                width=float(w))
+            for k, f, w in zip(keys.tolist(), faces, widths)}
