@@ -54,6 +54,25 @@ def _wait(future, timeout=TIMEOUT):
     return future.result()
 
 
+def _handshake(client, request, attempts=3, timeout=10.0):
+    """A client's first exchange, repeated until answered.
+
+    ``wait_for_service`` sees the server's endpoints from the client's side;
+    under load the server may not yet have matched the client's response
+    reader when it answers the first request, and Fast DDS then drops that
+    response (rmw_fastrtps waits 100 ms for the match, and not at all for a
+    client it has not met).  Later requests find the match made.
+    """
+    for _ in range(attempts):
+        done = threading.Event()
+        future = client.call_async(request)
+        future.add_done_callback(lambda _: done.set())
+        if done.wait(timeout):
+            return future.result()
+        client.remove_pending_request(future)
+    raise AssertionError(f"no answer to {attempts} first requests")
+
+
 class Suite:
     """All nodes of the suite plus a client node, spun by one executor thread."""
 
@@ -267,6 +286,9 @@ def test_concurrent_clients_lose_no_request(suite):
             outcomes.append(ok)
 
     assert all(s.wait_for_service(timeout_sec=TIMEOUT) for s in services)
+    for service in services:
+        _handshake(service, PlanPath.Request(start=_configuration(Q1), goal=_configuration(Q2),
+                                             feasibility_only=True))
     threads = [threading.Thread(target=run, args=(s,)) for s in services]
     for t in threads:
         t.start()

@@ -36,7 +36,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from visualization_msgs.msg import MarkerArray
 
 from .conversions import MAX_DURATION, duration_msg, roadmap_from_msgs
-from .profiles import BASE_FRAME, JOINT_NAMES, LATCHED_QOS
+from .profiles import BASE_FRAME, JOINT_NAMES, LATCHED_QOS, SERVICE_QOS
 from .spin import run
 from .visualization import path_markers
 
@@ -123,7 +123,7 @@ class PlannerNode(Node):
                                  callback_group=updates)
         self.trajectory_pub = self.create_publisher(JointTrajectory, "planned_trajectory", 10)
         self.marker_pub = self.create_publisher(MarkerArray, "planned_path_markers", 10)
-        self.create_service(PlanPath, "plan_path", self._on_plan,
+        self.create_service(PlanPath, "plan_path", self._on_plan, qos_profile=SERVICE_QOS,
                             callback_group=ReentrantCallbackGroup())
         self.ready = threading.Event()
 

@@ -4,13 +4,22 @@ kind of topic, the joint names and the frame of the manipulator's base."""
 from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy,
                        qos_profile_sensor_data)
 
-__all__ = ["LATCHED_QOS", "SENSOR_QOS", "JOINT_NAMES", "PASSIVE_JOINT_NAMES", "BASE_FRAME"]
+__all__ = ["LATCHED_QOS", "SENSOR_QOS", "SERVICE_QOS", "JOINT_NAMES", "PASSIVE_JOINT_NAMES",
+           "BASE_FRAME"]
 
 # Maps and roadmaps, as nav2's map server: the latest one, to late joiners too
 # (subscribers use the same profile).
 LATCHED_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                          reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
+# Services many clients call at once.  One writer sends every client's
+# response and, reliable but keeping the last 10 only (the services' default),
+# it overwrote responses not yet acknowledged when more than 10 were in flight
+# on a loaded machine: a request was then lost for good (about one in 2,000
+# with 8 clients on 2 cores).
+SERVICE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
+                         reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.VOLATILE)
 # Joint states, poses and markers at the control rate: the newest matters.
 SENSOR_QOS = qos_profile_sensor_data
 # The 3-RPR's actuated legs, in the core's joint order.
