@@ -459,7 +459,7 @@ def test_adaptive_pairs_match_the_numpy_reference(adaptive_case):
 def test_patch_numbering_matches_the_whole_array_assignment(cases):
     field = cases.field("paper_rho17_step0.25")
     seg = cases.segmentation("paper_rho17_step0.25")
-    linked = [segmentation._linked_disks(lo, up, m) for lo, up, m in seg.links]
+    linked = [segmentation.linked_solutions(lo, up, m) for lo, up, m in seg.links]
     disk_links = segmentation._within_region_links(field, seg.region, linked)
     valid = (field.valid & (seg.region[:, None] > 0)).ravel()
     component = segmentation._components_by_csgraph(valid, disk_links, valid.size)
@@ -477,12 +477,12 @@ def test_patch_numbering_matches_the_whole_array_assignment(cases):
     np.testing.assert_array_equal(got, expected)
 
 
-def test_linked_disks_are_the_nonzero_links(case):
+def test_linked_solutions_are_the_nonzero_links(case):
     field, seg, _ = case
     n = field.max_solutions
     for lo, up, match in seg.links:
         rows, slots = np.nonzero(match >= 0)
-        a, b = segmentation._linked_disks(lo, up, match)
+        a, b = segmentation.linked_solutions(lo, up, match)
         np.testing.assert_array_equal(a, lo[rows] * n + slots)
         np.testing.assert_array_equal(b, up[rows] * n + match[rows, slots])
 

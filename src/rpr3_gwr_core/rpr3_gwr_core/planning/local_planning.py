@@ -39,6 +39,7 @@ import numpy as np
 from .astar import (UNREACHED, _half_quanta, adjacency, edge_quanta, gate_distances,
                     gate_nodes, layered_astar)
 from ..exceptions import InfeasiblePathError, InvalidInputError
+from ..workspace.segmentation import linked_solutions
 
 __all__ = ["LocalPlanner", "LocalPath", "DEFAULT_CLEARANCE_WEIGHT"]
 
@@ -115,14 +116,13 @@ class LocalPlanner:
         """The node pairs of every continuation link between two patch
         solutions, within a patch or across a gate."""
         seg = self.segmentation
-        node_of = np.full(seg.patch.shape, -1, dtype=np.int32)
+        node_of = np.full(seg.patch.size, -1, dtype=np.int32)
         for p, offset in zip(patches, self._offsets.tolist()):
-            node_of[p.cells, p.slots] = np.arange(offset, offset + p.cells.size, dtype=np.int32)
+            node_of[p.cells * seg.patch.shape[1] + p.slots] = np.arange(
+                offset, offset + p.cells.size, dtype=np.int32)
         a_all, b_all = [np.zeros(0, np.int32)], [np.zeros(0, np.int32)]
         for lower, upper, match in seg.links:
-            rows, slots = np.nonzero(match >= 0)
-            a = node_of[lower[rows], slots]
-            b = node_of[upper[rows], match[rows, slots].astype(np.int64)]
+            a, b = (node_of[disks] for disks in linked_solutions(lower, upper, match))
             keep = (a >= 0) & (b >= 0)
             a_all.append(a[keep])
             b_all.append(b[keep])

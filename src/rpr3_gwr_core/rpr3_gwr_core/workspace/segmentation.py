@@ -62,7 +62,7 @@ from ..exceptions import InvalidInputError
 from .continuity import match_solutions
 from .rotary_disk import passage_from_links, rotary_disk_search
 
-__all__ = ["Patch", "Gate", "Segmentation", "segment"]
+__all__ = ["Patch", "Gate", "Segmentation", "segment", "linked_solutions"]
 
 METHODS = ("components", "rds")
 
@@ -223,7 +223,7 @@ def segment(field, method="components", min_region_cells=8):
         matches = list(pool.map(lambda pair: match_solutions(field, *pair), pairs))
     links = [(lo, up, match) for (lo, up), match in zip(pairs, matches)]
     region = _regions(field, links, int(min_region_cells))
-    linked = [_linked_disks(lo, up, match) for lo, up, match in links]
+    linked = [linked_solutions(lo, up, match) for lo, up, match in links]
     disk_links = _within_region_links(field, region, linked)
     n_disks = field.grid.size * field.max_solutions
     valid = (field.valid & (region[:, None] > 0)).ravel()
@@ -262,9 +262,15 @@ def _regions(field, links, min_cells):
 
 
 @numba.njit(cache=True, nogil=True)
-def _linked_disks(lower, upper, match):
-    """The solutions one axis's links join, as disks ``cell * max_solutions +
-    slot``: ``(lower disks, upper disks)``, face by face, slot by slot."""
+def linked_solutions(lower, upper, match):
+    """The solutions one axis's links join (:attr:`Segmentation.links`), as
+    disks ``cell * max_solutions + slot``.
+
+    Returns
+    -------
+    lower, upper : ndarray of int64
+        The joined disks, face by face, slot by slot.
+    """
     width = match.shape[1]
     total = 0
     for k in range(match.shape[0]):
