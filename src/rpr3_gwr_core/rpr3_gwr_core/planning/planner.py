@@ -333,8 +333,9 @@ class Planner:
         """The shortcut path's validation and kept waypoints; a shortcut the
         validator refuses is replaced by shorter ones over the same cells (the
         stretch shortcut again without its direct jump), a few times, then
-        the cell path is restored whole.  A failure is then one of the cell
-        path's own steps."""
+        the cell path is restored whole (its turns: points inside a straight
+        run add nothing).  A failure is then one of the cell path's own
+        steps."""
         kept = np.arange(len(joints))
         margins = self._waypoint_margins(joints, patches)
         if len(joints) > 2:
@@ -348,7 +349,7 @@ class Planner:
             restored = a + self._shortcut(joints[a:b], patches[a:b], margins[a:b], clearance,
                                           split=True)
             if attempt == _RESTORED_SHORTCUTS:
-                restored = np.arange(len(joints))
+                restored = _turns(joints)
             kept = np.union1d(kept, restored)
         return result, kept
 
@@ -464,3 +465,12 @@ class Planner:
             k = max(result.failed_segment, 1)
             corners[origin[k - 1]:origin[min(k, len(origin) - 1)] + 1] = False
         return None
+
+
+def _turns(points):
+    """Indices of a polyline's ends and of the points where it turns."""
+    step = np.diff(points, axis=0)
+    length = np.linalg.norm(step, axis=1, keepdims=True)
+    direction = step / np.where(length > 0, length, 1.0)
+    straight = np.all(np.abs(direction[1:] - direction[:-1]) < 1e-9, axis=1)
+    return np.flatnonzero(np.concatenate([[True], ~straight, [True]]))
