@@ -312,3 +312,10 @@ def test_planner_works_on_another_rho1():
     a, b = ((*roadmap.grid.joints_of(c), float(seg.field.poses[c, s, 2])) for c, s in ends)
     plan = planner.plan(a, b)
     assert plan.validation.ok and set(plan.patches.tolist()) == {big.id}
+
+
+def test_a_polyline_keeps_its_ends_and_turns():
+    from rpr3_gwr_core.planning.planner import _turns
+    points = np.array([[0, 0], [1, 0], [2, 0], [2, 1], [2, 2], [3, 3], [4, 4], [4, 4.5]],
+                      dtype=float)
+    assert _turns(points).tolist() == [0, 2, 4, 6, 7]
