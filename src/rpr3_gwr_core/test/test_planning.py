@@ -319,3 +319,10 @@ def test_a_polyline_keeps_its_ends_and_turns():
     points = np.array([[0, 0], [1, 0], [2, 0], [2, 1], [2, 2], [3, 3], [4, 4], [4, 4.5]],
                       dtype=float)
     assert _turns(points).tolist() == [0, 2, 4, 6, 7]
+
+
+def test_gate_distances_are_kept_for_the_latest_clearances_only(paper_roadmap):
+    local = Planner(paper_roadmap).local
+    for clearance in (0.0, 0.01, 0.02, 0.03, 0.04, 0.02):
+        local.prepare(clearance)
+    assert list(local._to_gate) == [0.01, 0.03, 0.04, 0.02]

@@ -29,6 +29,7 @@ outside the interpreter's lock, each on work arrays of its own, so requests
 in several threads plan at once.
 """
 
+import collections
 from dataclasses import dataclass
 import math
 import queue
@@ -49,6 +50,9 @@ _UNRESOLVED_DEPTH = 0.5
 # The search's costs are integers (:mod:`~.astar`): the paper's cell cost
 # 1 + w / d is rounded up to whole eighths.
 _COST_UNITS = 8
+# Clearances whose gate distances are kept (a full 3-DOF roadmap's take up to
+# 180 MB each).
+_KEPT_CLEARANCES = 4
 
 
 @dataclass(frozen=True)
@@ -107,7 +111,8 @@ class LocalPlanner:
         # (the clearance of a large 3-D patch takes a while).
         self._node_cost = {}
         self._cost_floor = {}
-        self._to_gate = {}
+        # Per clearance (most recently used last), per patch and gate.
+        self._to_gate = collections.OrderedDict()
         self._gate_nodes = {}
         self._lock = threading.Lock()
         self._work = queue.SimpleQueue()
@@ -165,10 +170,15 @@ class LocalPlanner:
     def _distances_to_gate(self, k, other, clearance):
         """:func:`~.astar.gate_distances` of the patch at index ``k`` to its
         gate to ``other``."""
-        # Computed without a lock: two threads may both compute one the first
-        # time, and keep the same values.
-        distances = self._to_gate.get((k, other, clearance))
+        with self._lock:
+            fields = self._to_gate.setdefault(clearance, {})
+            self._to_gate.move_to_end(clearance)
+            while len(self._to_gate) > _KEPT_CLEARANCES:
+                self._to_gate.popitem(last=False)
+        distances = fields.get((k, other))
         if distances is None:
+            # Computed without the lock: two threads may both compute one the
+            # first time, and keep the same values.
             work = self._borrow()
             try:
                 distances = gate_distances(
@@ -178,7 +188,7 @@ class LocalPlanner:
                     self._patch_nodes(k, other), *work)
             finally:
                 self._work.put(work)
-            distances = self._to_gate.setdefault((k, other, clearance), distances)
+            distances = fields.setdefault((k, other), distances)
         return distances
 
     def _heuristic(self, index, target, clearance):
