@@ -149,6 +149,17 @@ def _estimate(coords, quantum, node_cell, node_patch, layer, to_gate, to_gate_st
     return cost_floor * length
 
 
+@numba.njit(cache=True)
+def _append(nodes, others, count, node, other):
+    """``nodes[count], others[count] = node, other``, the arrays doubled when
+    full; returns them."""
+    if count == nodes.size:
+        nodes = np.concatenate((nodes, np.empty(count, np.int64)))
+        others = np.concatenate((others, np.empty(count, np.int64)))
+    nodes[count], others[count] = node, other
+    return nodes, others
+
+
 @numba.njit(cache=True, nogil=True)
 def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin, clearance,
             penalty, coords, quantum, layer, sources, target, blocked, cost_floor, to_gate,
@@ -159,9 +170,9 @@ def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_marg
     goal = node_cell[target] if target >= 0 else 0
     last = layer[node_patch[target]] if target >= 0 else 0
     head = np.full(_RING, -1, np.int64)
-    capacity = max(1024, 2 * sources.size)
-    entry_node = np.empty(capacity, np.int64)
-    entry_next = np.empty(capacity, np.int64)
+    # The ring's buckets are stacks linked through these entries.
+    entry_node = np.empty(1024, np.int64)
+    entry_next = np.empty(1024, np.int64)
     entries = 0
     waiting_node = np.empty(64, np.int64)
     waiting_key = np.empty(64, np.int64)
@@ -172,14 +183,11 @@ def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_marg
         pred[s] = -1
         touched[n_touched] = s
         n_touched += 1
-        waiting_node[waiting] = s
-        waiting_key[waiting] = _estimate(coords, quantum, node_cell, node_patch, layer, to_gate,
-                                         to_gate_start, rest, landmarks, last, cost_floor,
-                                         goal, s)
+        waiting_node, waiting_key = _append(
+            waiting_node, waiting_key, waiting, s,
+            _estimate(coords, quantum, node_cell, node_patch, layer, to_gate, to_gate_start,
+                      rest, landmarks, last, cost_floor, goal, s))
         waiting += 1
-        if waiting == waiting_node.size:
-            waiting_node = np.concatenate((waiting_node, np.empty(waiting, np.int64)))
-            waiting_key = np.concatenate((waiting_key, np.empty(waiting, np.int64)))
     pending = 0
     current = 0
     taken_at = -1
@@ -195,12 +203,9 @@ def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_marg
             kept = 0
             for w in range(waiting):
                 if waiting_key[w] < current + _RING:
-                    if entries == capacity:
-                        capacity *= 2
-                        entry_node = np.concatenate((entry_node, np.empty(entries, np.int64)))
-                        entry_next = np.concatenate((entry_next, np.empty(entries, np.int64)))
                     bucket = waiting_key[w] % _RING
-                    entry_node[entries], entry_next[entries] = waiting_node[w], head[bucket]
+                    entry_node, entry_next = _append(entry_node, entry_next, entries,
+                                                     waiting_node[w], head[bucket])
                     head[bucket] = entries
                     entries += 1
                     pending += 1
@@ -245,20 +250,15 @@ def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_marg
                     coords, quantum, node_cell, node_patch, layer, to_gate, to_gate_start, rest,
                     landmarks, last, cost_floor, goal, v))
                 if key < current + _RING:
-                    if entries == capacity:
-                        capacity *= 2
-                        entry_node = np.concatenate((entry_node, np.empty(entries, np.int64)))
-                        entry_next = np.concatenate((entry_next, np.empty(entries, np.int64)))
                     bucket = key % _RING
-                    entry_node[entries], entry_next[entries] = v, head[bucket]
+                    entry_node, entry_next = _append(entry_node, entry_next, entries, v,
+                                                     head[bucket])
                     head[bucket] = entries
                     entries += 1
                     pending += 1
                 else:
-                    if waiting == waiting_node.size:
-                        waiting_node = np.concatenate((waiting_node, np.empty(waiting, np.int64)))
-                        waiting_key = np.concatenate((waiting_key, np.empty(waiting, np.int64)))
-                    waiting_node[waiting], waiting_key[waiting] = v, key
+                    waiting_node, waiting_key = _append(waiting_node, waiting_key, waiting, v,
+                                                        key)
                     waiting += 1
     return n_touched
 
