@@ -9,8 +9,9 @@ the planned gates in order.  Edge weights are not stored: an edge between
 face-adjacent cells costs its length times the mean cost of its two nodes,
 which keeps a 3-D roadmap's adjacency to one index array.
 
-Costs are integers: lengths in whole quanta (the grid's smallest step, of
-which every face length is a multiple, :func:`edge_quanta`), node costs in
+Costs are integers: lengths in whole quanta (the longest length of which
+every grid step is a whole multiple: the smallest step on the grids built
+here; :func:`edge_quanta`), node costs in
 whole units (1, or ``penalty`` below the clearance, times the caller's
 clearance weight cost in whole units), so an edge of ``q`` quanta between
 nodes of costs ``a`` and ``b`` costs ``q (a + b)``.  The open set is then a
