@@ -161,7 +161,10 @@ class PlannerNode(Node):
             f"{_describe(planner.roadmap.grid)}, {len(planner.roadmap.graph)} patches, ready in "
             f"{time.perf_counter() - start:.3f} s")
         self.ready.set()
-        _warm_up(planner)
+        try:
+            _warm_up(planner)
+        except Exception as exc:  # a bug there must not take the node down
+            self.get_logger().warning(f"the warm-up plan failed: {exc!r}")
 
     def _options(self, request):
         """PlanOptions of a request; 0 and 0 limits take the node's defaults,
