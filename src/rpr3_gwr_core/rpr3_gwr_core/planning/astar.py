@@ -133,20 +133,20 @@ def _node_cost(node_cost, node_margin, clearance, penalty, u):
 
 
 @numba.njit(cache=True)
-def _estimate(coords, quantum, node_cell, node_patch, layer, to_gate, to_gate_start, rest,
-              landmarks, last, cost_floor, goal, v):
+def _estimate(coords, quantum, node_cell, node_patch, layer, fields, to_gate_start, rest,
+              landmark_start, landmark_goal, last, cost_floor, goal, v):
     """The heuristic of node ``v`` (module doc); 0 without a goal."""
     if cost_floor == 0:
         return 0
     length = _half_quanta(coords, quantum, node_cell[v], goal)
     here = layer[node_patch[v]]
     if here < last:
-        length = max(length, to_gate[to_gate_start[here] + v] + rest[here])
+        length = max(length, fields[to_gate_start[here] + v] + rest[here])
     else:
-        at = v + to_gate_start[last]
-        for j in range(landmarks.shape[0]):
-            if landmarks[j, at] < UNREACHED and landmarks[j, -1] < UNREACHED:
-                length = max(length, abs(landmarks[j, at] - landmarks[j, -1]))
+        for j in range(landmark_start.size):
+            at = fields[landmark_start[j] + v]
+            if at < UNREACHED and landmark_goal[j] < UNREACHED:
+                length = max(length, abs(at - landmark_goal[j]))
     return cost_floor * length
 
 
@@ -163,8 +163,8 @@ def _append(nodes, others, count, node, other):
 
 @numba.njit(cache=True, nogil=True)
 def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin, clearance,
-            penalty, coords, quantum, layer, sources, target, blocked, cost_floor, to_gate,
-            to_gate_start, rest, landmarks, g, pred, closed, touched):
+            penalty, coords, quantum, layer, sources, target, blocked, cost_floor, fields,
+            to_gate_start, rest, landmark_start, landmark_goal, g, pred, closed, touched):
     """Least costs from ``sources`` through the layers, up to ``target`` (all
     reachable nodes when it is -1); returns how many nodes it touched, which
     are the first entries of ``touched``."""
@@ -186,8 +186,8 @@ def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_marg
         n_touched += 1
         waiting_node, waiting_key = _append(
             waiting_node, waiting_key, waiting, s,
-            _estimate(coords, quantum, node_cell, node_patch, layer, to_gate, to_gate_start,
-                      rest, landmarks, last, cost_floor, goal, s))
+            _estimate(coords, quantum, node_cell, node_patch, layer, fields, to_gate_start,
+                      rest, landmark_start, landmark_goal, last, cost_floor, goal, s))
         waiting += 1
     pending = 0
     current = 0
@@ -248,8 +248,8 @@ def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_marg
                 pred[v] = u
                 # A consistent estimate never puts a key behind the current one.
                 key = max(current, reach + _estimate(
-                    coords, quantum, node_cell, node_patch, layer, to_gate, to_gate_start, rest,
-                    landmarks, last, cost_floor, goal, v))
+                    coords, quantum, node_cell, node_patch, layer, fields, to_gate_start, rest,
+                    landmark_start, landmark_goal, last, cost_floor, goal, v))
                 if key < current + _RING:
                     bucket = key % _RING
                     entry_node, entry_next = _append(entry_node, entry_next, entries, v,
@@ -306,8 +306,7 @@ def gate_distances(indptr, indices, quanta, node_cell, node_patch, node_cost, no
     empty = np.zeros(0, np.int64)
     n_touched = _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
                         clearance, penalty, coords, quantum, layer, sources, -1, empty, 0,
-                        empty, empty, empty, np.zeros((0, 1), np.int64), g, pred, closed,
-                        touched)
+                        empty, empty, empty, empty, empty, g, pred, closed, touched)
     out = g[first:stop].copy()
     _reset(g, closed, touched, n_touched)
     return out
@@ -316,8 +315,8 @@ def gate_distances(indptr, indices, quanta, node_cell, node_patch, node_cost, no
 @numba.njit(cache=True, nogil=True)
 def layered_astar(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
                   clearance, penalty, coords, quantum, layer, source, target, blocked,
-                  cost_floor, to_gate, to_gate_start, rest, landmarks, g, pred, closed,
-                  touched):
+                  cost_floor, fields, to_gate_start, rest, landmark_start, landmark_goal, g,
+                  pred, closed, touched):
     """Least-cost node path from ``source`` to ``target`` through the layers.
 
     Parameters
@@ -350,15 +349,17 @@ def layered_astar(indptr, indices, quanta, node_cell, node_patch, node_cost, nod
     cost_floor : int
         Smallest ``node_cost`` on the path's patches (scales the heuristic),
         at least 1.
-    to_gate, to_gate_start, rest : ndarray of int64
+    fields : ndarray of int64
+        :func:`gate_distances` of patches, each at an offset of its own.
+    to_gate_start, rest : ndarray of int64, shape (layers,)
         Costs for the layers before the last: a node ``v`` in layer ``i``
-        costs at least ``to_gate[to_gate_start[i] + v] + rest[i]`` to the
-        target (:func:`gate_distances` of its patch to the next gate, and
-        the least such bound beyond that gate); ``-to_gate_start[last]`` is
-        the first node of the last layer.
-    landmarks : ndarray of int64, shape (k, n + 1)
-        :func:`gate_distances` of the last layer's patch (its ``n`` nodes) to
-        each of its gates, then of the target.
+        costs at least ``fields[to_gate_start[i] + v] + rest[i]`` to the
+        target (the distances of its patch to the next gate, and the least
+        such bound beyond that gate).
+    landmark_start, landmark_goal : ndarray of int64, shape (k,)
+        The last layer's patch's distances to each of its gates, at
+        ``fields[landmark_start[j] + v]``, and the target's: within the
+        patch a node costs at least their difference.
     g, pred, closed, touched : ndarray, shape (n_nodes,)
         Work arrays: ``g`` (int64) all :data:`UNREACHED` and ``closed``
         (uint8) all zero on entry, and so again on return.
@@ -373,8 +374,8 @@ def layered_astar(indptr, indices, quanta, node_cell, node_patch, node_cost, nod
     sources = np.full(1, source, np.int64)
     n_touched = _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
                         clearance, penalty, coords, quantum, layer, sources, target, blocked,
-                        cost_floor, to_gate, to_gate_start, rest, landmarks, g, pred, closed,
-                        touched)
+                        cost_floor, fields, to_gate_start, rest, landmark_start, landmark_goal,
+                        g, pred, closed, touched)
     cost = g[target]
     count = 0
     if closed[target]:

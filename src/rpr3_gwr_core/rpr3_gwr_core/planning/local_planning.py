@@ -111,7 +111,16 @@ class LocalPlanner:
         # (the clearance of a large 3-D patch takes a while).
         self._node_cost = {}
         self._cost_floor = {}
-        # Per clearance (most recently used last), per patch and gate.
+        # Per clearance (most recently used last), the distances of every
+        # patch to each of its gates in one array, each at an offset of its
+        # own, filled on first use: a search then reads them in place.
+        self._field_offset = {}
+        total = 0
+        for k, others in enumerate(self._neighbours):
+            for other in others:
+                self._field_offset[k, other] = total
+                total += int(self._offsets[k + 1] - self._offsets[k])
+        self._field_total = total
         self._to_gate = collections.OrderedDict()
         self._gate_nodes = {}
         self._lock = threading.Lock()
@@ -167,62 +176,68 @@ class LocalPlanner:
                 self._offsets[k + 1], other))
         return nodes
 
-    def _distances_to_gate(self, k, other, clearance):
-        """:func:`~.astar.gate_distances` of the patch at index ``k`` to its
-        gate to ``other``."""
+    def _fields(self, clearance):
+        """The gate distances of a clearance (module doc of
+        :mod:`~.astar`) and the set of ``(k, other)`` already filled."""
         with self._lock:
-            fields = self._to_gate.setdefault(clearance, {})
+            if clearance not in self._to_gate:
+                # Pages of an empty array are only taken when filled.
+                self._to_gate[clearance] = (np.empty(self._field_total, np.int64), set())
             self._to_gate.move_to_end(clearance)
             while len(self._to_gate) > _KEPT_CLEARANCES:
                 self._to_gate.popitem(last=False)
-        distances = fields.get((k, other))
-        if distances is None:
+            return self._to_gate[clearance]
+
+    def _distances_to_gate(self, fields, filled, k, other, clearance):
+        """Offset in ``fields`` of :func:`~.astar.gate_distances` of the patch at
+        index ``k`` to its gate to ``other``, computed if not yet filled."""
+        offset = self._field_offset[k, other]
+        if (k, other) not in filled:
             # Computed without the lock: two threads may both compute one the
-            # first time, and keep the same values.
+            # first time, and write the same values.
             work = self._borrow()
             try:
-                distances = gate_distances(
+                fields[offset:offset + self._offsets[k + 1] - self._offsets[k]] = gate_distances(
                     self._indptr, self._indices, self._quanta, self._node_cell,
                     self._node_patch, self._costed(0.0, k)[0], self._node_margin, clearance,
                     _LOW_MARGIN_FACTOR, self._coords, self._quantum, self._pids.size, k,
                     self._patch_nodes(k, other), *work)
             finally:
                 self._work.put(work)
-            distances = fields.setdefault((k, other), distances)
-        return distances
+            filled.add((k, other))
+        return offset
 
     def _heuristic(self, index, target, clearance):
-        """``to_gate``, ``to_gate_start``, ``rest`` and ``landmarks`` of
-        :func:`~.astar.layered_astar` for the patches at ``index``, the layers
-        in order, and the target node."""
-        fields = [self._distances_to_gate(k, m, clearance) for k, m in zip(index, index[1:])]
+        """``fields``, ``to_gate_start``, ``rest``, ``landmark_start`` and
+        ``landmark_goal`` of :func:`~.astar.layered_astar` for the patches at
+        ``index``, the layers in order, and the target node."""
+        fields, filled = self._fields(clearance)
+        starts = np.array([self._distances_to_gate(fields, filled, k, m, clearance)
+                           for k, m in zip(index, index[1:])] + [0], dtype=np.int64)
+        starts -= self._offsets[index]
         last, goal_cell = index[-1], self._node_cell[target]
-        first = self._offsets[last]
-        starts = np.cumsum([0] + [f.size for f in fields]) - self._offsets[index]
-        starts[-1] = -first
-        landmarks = np.array(
-            [np.append(field, field[target - first]) for field in (
-                self._distances_to_gate(last, other, clearance)
-                for other in self._neighbours[last])],
-            dtype=np.int64).reshape(-1, self._offsets[last + 1] - first + 1)
+        landmark_start = np.array(
+            [self._distances_to_gate(fields, filled, last, other, clearance)
+             for other in self._neighbours[last]], dtype=np.int64) - self._offsets[last]
+        landmark_goal = fields[landmark_start + target]
         rest = np.zeros(len(index), dtype=np.int64)
         if len(index) > 1:
             entry = self._patch_nodes(index[-1], index[-2])
             rest[-2] = min(_half_quanta(self._coords, self._quantum, c, goal_cell)
                            for c in self._node_cell[entry].tolist())
         for i in range(len(index) - 3, -1, -1):
-            entry = self._patch_nodes(index[i + 1], index[i]) - self._offsets[index[i + 1]]
-            rest[i] = rest[i + 1] + int(np.min(fields[i + 1][entry]))
-        return (np.concatenate(fields + [np.zeros(0, np.int64)]), starts.astype(np.int64), rest,
-                landmarks)
+            entry = self._patch_nodes(index[i + 1], index[i])
+            rest[i] = rest[i + 1] + int(np.min(fields[starts[i + 1] + entry]))
+        return fields, starts, rest, landmark_start, landmark_goal
 
     def prepare(self, clearance):
         """Compute every patch's costs to each of its gates for a clearance
         now rather than on first use (a few tenths of a second for the
         paper's roadmap, seconds for the full 3-DOF one)."""
+        fields, filled = self._fields(float(clearance))
         for k, others in enumerate(self._neighbours):
             for other in others:
-                self._distances_to_gate(k, other, float(clearance))
+                self._distances_to_gate(fields, filled, k, other, float(clearance))
 
     def cells_around(self, point, radius):
         """Cells within ``radius`` grid steps of a point along every axis.
