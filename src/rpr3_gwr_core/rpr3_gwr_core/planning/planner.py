@@ -22,7 +22,7 @@ from .global_planning import RoadmapIndex, feasibility, global_paths, longer_pat
 from .local_planning import DEFAULT_CLEARANCE_WEIGHT, LocalPlanner
 from .locate import DEFAULT_MODE_TOL, locate
 from .segments import segments_clear
-from .trajectory import cut_corners, shortcut, time_parameterize
+from .trajectory import corner_cuts, cut_corners, shortcut, time_parameterize
 from .validation import DEFAULT_MAX_STEP, DEFAULT_MIN_MARGIN, validate_path
 
 __all__ = ["PlanOptions", "Plan", "Planner"]
@@ -376,8 +376,7 @@ class Planner:
         """Margin of each waypoint's patch solution at its cell, 0 where that
         cell has none (the exact start and goal may lie in such a cell; the
         validator checks the margin there)."""
-        cells = self.roadmap.grid.cells_of(joints[:, list(self.roadmap.grid.axis_joints)])
-        return self._patch_margin(patches, cells)
+        return self._patch_margin(patches, self.roadmap.grid.cells_of(joints[:, self._free]))
 
     @staticmethod
     def _floor(margins, clearance):
@@ -445,10 +444,8 @@ class Planner:
         inner = np.arange(1, len(joints) - 1)
         inner = inner[(patches[inner - 1] == patches[inner])
                       & (patches[inner] == patches[inner + 1])]
-        # Cutting corner i replaces it by points a quarter of the way to its
-        # neighbours: three segments to check.
-        before = 0.75 * joints[inner] + 0.25 * joints[inner - 1]
-        after = 0.75 * joints[inner] + 0.25 * joints[inner + 1]
+        # A cut corner is three segments to check.
+        before, after = corner_cuts(joints, inner)
         floors = [self._floor(margins[i - 1:i + 2], clearance) for i in inner]
         clear = self._clear(np.concatenate([joints[inner - 1], before, after]),
                             np.concatenate([before, after, joints[inner + 1]]),

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..exceptions import InvalidInputError
 
-__all__ = ["shortcut", "cut_corners", "time_parameterize"]
+__all__ = ["shortcut", "cut_corners", "corner_cuts", "time_parameterize"]
 
 
 def shortcut(points, allowed, max_passes=3):
@@ -94,9 +94,20 @@ def cut_corners(points, corners):
     origin = np.repeat(np.arange(len(points)), np.where(cut, 2, 1))
     out = points[origin]
     first = np.flatnonzero(cut[origin] & (np.diff(origin, prepend=-1) > 0))
-    out[first] = 0.75 * points[origin[first]] + 0.25 * points[origin[first] - 1]
-    out[first + 1] = 0.75 * points[origin[first]] + 0.25 * points[origin[first] + 1]
+    out[first], out[first + 1] = corner_cuts(points, origin[first])
     return out, origin
+
+
+def corner_cuts(points, at):
+    """Chaikin's cut of the corners at indices ``at``: the points a quarter
+    of the way from each to its previous and to its next neighbour.
+
+    Returns
+    -------
+    before, after : ndarray, shape (len(at), d)
+    """
+    return (0.75 * points[at] + 0.25 * points[at - 1],
+            0.75 * points[at] + 0.25 * points[at + 1])
 
 
 def time_parameterize(path, max_velocity, max_acceleration):
