@@ -18,8 +18,10 @@ from rpr3_gwr_core.paper import PAPER_GEOMETRY, rho1_slice
 from rpr3_gwr_core.planning.global_planning import feasibility, global_paths
 from rpr3_gwr_core.mechanisms.rpr3 import inverse_kinematics, singularity_margin
 from rpr3_gwr_core.planning.planner import PlanOptions, Planner
+from rpr3_gwr_core.workspace.grid import Axis, Grid
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
-from rpr3_gwr_core.planning.trajectory import cut_corners, shortcut, time_parameterize
+from rpr3_gwr_core.planning.segments import shortcut_path
+from rpr3_gwr_core.planning.trajectory import cut_corners, time_parameterize
 from rpr3_gwr_core.planning.validation import validate_path
 
 D = math.radians
@@ -271,19 +273,50 @@ def test_every_plan_validates_and_infeasible_only_without_roadmap_path(planner, 
     assert np.all(np.sign(singularity_margin(plan.poses)) == check.aspect)
 
 
-def test_shortcut_keeps_the_ends_and_cutting_corners_keeps_the_endpoints():
-    points = np.array([[0, 0], [1, 0], [2, 0], [3, 0], [3, 1]], dtype=float)
-    asked = []
+def _shortcut_on_square(points, patches, margins, clearance=0.1, split=False,
+                        other_patch=(), low_margin=()):
+    """shortcut_path on a 5 x 5 grid of step 1 that is patch 1 with margin
+    0.5, except ``other_patch`` cells (patch 2) and ``low_margin`` cells
+    (margin 0.08)."""
+    grid = Grid((Axis(0, 0.0, 4.0, 1.0), Axis(1, 0.0, 4.0, 1.0)))
+    patch_of = np.ones((grid.size, 1), dtype=np.int64)
+    margin = np.full((grid.size, 1), 0.5)
+    for x, y in other_patch:
+        patch_of[5 * x + y] = 2
+    for x, y in low_margin:
+        margin[5 * x + y] = -0.08
+    return shortcut_path(np.array(points, dtype=float), np.array(patches, dtype=np.int64),
+                         np.array(margins, dtype=float), clearance, split, 2, 1.0,
+                         grid.lattice, patch_of, margin).tolist()
 
-    def allowed(i, js):
-        asked.append((i, js.tolist()))
-        return (points[js, 1] == points[i, 1]) | (js - i == 1)
 
-    keep = shortcut(points, allowed)
-    # The longest jump, then halved ones: 0 -> 4 is refused, 0 -> 2 taken.
-    assert asked[0] == (0, [4, 2])
-    assert keep.tolist() == [0, 2, 3, 4]
-    rounded, origin = cut_corners(points[keep], np.ones(len(keep), dtype=bool))
+EDGE = [(0, 0), (1, 0), (2, 0), (3, 0), (4, 0), (4, 1), (4, 2), (4, 3), (4, 4)]
+
+
+def test_shortcut_takes_the_longest_clear_jump_then_halved_ones():
+    assert _shortcut_on_square(EDGE, [1] * 9, [0.5] * 9) == [0, 8]
+    # The diagonal crosses cell (2, 2), on another patch: refused, so the
+    # jump of half as many waypoints is taken, along the edge.
+    assert _shortcut_on_square(EDGE, [1] * 9, [0.5] * 9, other_patch=[(2, 2)]) == [0, 4, 8]
+    # Without its straight jump, a run is cut in halves.
+    assert _shortcut_on_square(EDGE[:5], [1] * 5, [0.5] * 5, split=True) == [0, 2, 4]
+
+
+def test_shortcut_keeps_gate_crossings_and_the_margin_the_path_kept():
+    # A gate between (4, 0) on patch 1 and (4, 1) on patch 2: both stay.
+    assert _shortcut_on_square(EDGE, [1] * 5 + [2] * 4, [0.5] * 9,
+                               other_patch=EDGE[5:]) == [0, 4, 5, 8]
+    # Cell (2, 2) has margin 0.08, below the clearance 0.1: refused, unless
+    # a waypoint the jump replaces already passes that low.
+    assert _shortcut_on_square(EDGE, [1] * 9, [0.5] * 9, low_margin=[(2, 2)]) == [0, 4, 8]
+    lower = [0.5] * 9
+    lower[6] = 0.05
+    assert _shortcut_on_square(EDGE, [1] * 9, lower, low_margin=[(2, 2)]) == [0, 8]
+
+
+def test_cutting_corners_keeps_the_endpoints():
+    points = np.array([[0, 0], [2, 0], [3, 0], [3, 1]], dtype=float)
+    rounded, origin = cut_corners(points, np.ones(len(points), dtype=bool))
     np.testing.assert_allclose(rounded[0], points[0])
     np.testing.assert_allclose(rounded[-1], points[-1])
     assert np.all(np.bincount(origin)[1:-1] == 2)

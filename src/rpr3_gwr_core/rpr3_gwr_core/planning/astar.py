@@ -38,7 +38,8 @@ keeps the search near one of them.
 import numba
 import numpy as np
 
-__all__ = ["adjacency", "edge_quanta", "gate_nodes", "gate_distances", "layered_astar",
+__all__ = ["adjacency", "node_positions", "edge_quanta", "gate_nodes", "gate_distances",
+           "layered_astar",
            "UNREACHED"]
 
 # Cost of a node the search did not reach; far above any path's, with room
@@ -79,30 +80,40 @@ def adjacency(n_nodes, a, b):
     return indptr, indices
 
 
+def node_positions(coords, quantum):
+    """Coordinates of nodes (or cells) in whole half quanta from the lowest,
+    shape (n, d), int32: the search's lengths are their L1 distances, read
+    next to each node's other data rather than through its cell.
+
+    Parameters
+    ----------
+    coords : ndarray, shape (n, d)
+        Coordinates on the grid's axes [joint unit], on the quantum's lattice.
+    quantum : float
+        The length of one quantum [joint unit].
+    """
+    coords = np.asarray(coords, dtype=float)
+    low = coords.min(axis=0) if coords.size else 0.0
+    return np.ascontiguousarray(np.rint(2.0 * (coords - low) / quantum), dtype=np.int32)
+
+
 @numba.njit(cache=True)
-def _l1(coords, c, d):
-    total = 0.0
-    for k in range(coords.shape[1]):
-        total += abs(coords[c, k] - coords[d, k])
+def _half_quanta(position, u, v):
+    """L1 distance of two nodes in half quanta."""
+    total = 0
+    for k in range(position.shape[1]):
+        total += abs(np.int64(position[u, k]) - np.int64(position[v, k]))
     return total
 
 
 @numba.njit(cache=True)
-def _half_quanta(coords, quantum, c, d):
-    """L1 distance of two cells in half quanta (whole, the cells being on
-    the quantum's lattice)."""
-    return int(round(2.0 * _l1(coords, c, d) / quantum))
-
-
-@numba.njit(cache=True)
-def edge_quanta(indptr, indices, node_cell, coords, quantum):
-    """Length of each edge of :func:`adjacency` in whole ``quantum``,
-    shape (indices.size,), uint16."""
+def edge_quanta(indptr, indices, position):
+    """Length of each edge of :func:`adjacency` in whole quanta (of
+    :func:`node_positions`), shape (indices.size,), uint16."""
     out = np.empty(indices.size, np.uint16)
     for u in range(indptr.size - 1):
         for e in range(indptr[u], indptr[u + 1]):
-            out[e] = min(65535, _half_quanta(coords, quantum, node_cell[u],
-                                             node_cell[indices[e]]) // 2)
+            out[e] = min(65535, _half_quanta(position, u, indices[e]) // 2)
     return out
 
 
@@ -133,12 +144,12 @@ def _node_cost(node_cost, node_margin, clearance, penalty, u):
 
 
 @numba.njit(cache=True)
-def _estimate(coords, quantum, node_cell, node_patch, layer, fields, to_gate_start, rest,
+def _estimate(position, node_patch, layer, fields, to_gate_start, rest,
               landmark_start, landmark_goal, last, cost_floor, goal, v):
     """The heuristic of node ``v`` (module doc); 0 without a goal."""
     if cost_floor == 0:
         return 0
-    length = _half_quanta(coords, quantum, node_cell[v], goal)
+    length = _half_quanta(position, v, goal)
     here = layer[node_patch[v]]
     if here < last:
         length = max(length, fields[to_gate_start[here] + v] + rest[here])
@@ -163,12 +174,12 @@ def _append(nodes, others, count, node, other):
 
 @numba.njit(cache=True, nogil=True)
 def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin, clearance,
-            penalty, coords, quantum, layer, sources, target, blocked, cost_floor, fields,
+            penalty, position, layer, sources, target, blocked, cost_floor, fields,
             to_gate_start, rest, landmark_start, landmark_goal, g, pred, closed, touched):
     """Least costs from ``sources`` through the layers, up to ``target`` (all
     reachable nodes when it is -1); returns how many nodes it touched, which
     are the first entries of ``touched``."""
-    goal = node_cell[target] if target >= 0 else 0
+    goal = max(target, 0)
     last = layer[node_patch[target]] if target >= 0 else 0
     head = np.full(_RING, -1, np.int64)
     # The ring's buckets are stacks linked through these entries.
@@ -186,7 +197,7 @@ def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_marg
         n_touched += 1
         waiting_node, waiting_key = _append(
             waiting_node, waiting_key, waiting, s,
-            _estimate(coords, quantum, node_cell, node_patch, layer, fields, to_gate_start,
+            _estimate(position, node_patch, layer, fields, to_gate_start,
                       rest, landmark_start, landmark_goal, last, cost_floor, goal, s))
         waiting += 1
     pending = 0
@@ -248,7 +259,7 @@ def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_marg
                 pred[v] = u
                 # A consistent estimate never puts a key behind the current one.
                 key = max(current, reach + _estimate(
-                    coords, quantum, node_cell, node_patch, layer, fields, to_gate_start, rest,
+                    position, node_patch, layer, fields, to_gate_start, rest,
                     landmark_start, landmark_goal, last, cost_floor, goal, v))
                 if key < current + _RING:
                     bucket = key % _RING
@@ -273,7 +284,7 @@ def _reset(g, closed, touched, n_touched):
 
 @numba.njit(cache=True, nogil=True)
 def gate_distances(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
-                   clearance, penalty, coords, quantum, n_patches, k, sources, g, pred, closed,
+                   clearance, penalty, position, n_patches, k, sources, g, pred, closed,
                    touched):
     """Least cost from each node of one patch to any of ``sources`` within the
     patch, in the units of :func:`layered_astar`.
@@ -305,7 +316,7 @@ def gate_distances(indptr, indices, quanta, node_cell, node_patch, node_cost, no
     layer[k] = 0
     empty = np.zeros(0, np.int64)
     n_touched = _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
-                        clearance, penalty, coords, quantum, layer, sources, -1, empty, 0,
+                        clearance, penalty, position, layer, sources, -1, empty, 0,
                         empty, empty, empty, empty, empty, g, pred, closed, touched)
     out = g[first:stop].copy()
     _reset(g, closed, touched, n_touched)
@@ -314,7 +325,7 @@ def gate_distances(indptr, indices, quanta, node_cell, node_patch, node_cost, no
 
 @numba.njit(cache=True, nogil=True)
 def layered_astar(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
-                  clearance, penalty, coords, quantum, layer, source, target, blocked,
+                  clearance, penalty, position, layer, source, target, blocked,
                   cost_floor, fields, to_gate_start, rest, landmark_start, landmark_goal, g,
                   pred, closed, touched):
     """Least-cost node path from ``source`` to ``target`` through the layers.
@@ -336,10 +347,8 @@ def layered_astar(indptr, indices, quanta, node_cell, node_patch, node_cost, nod
     clearance : float
     penalty : int
         Nodes with a margin below ``clearance`` cost ``penalty`` times more.
-    coords : ndarray of float64, shape (n_cells, d)
-        Coordinates of the cells [joint unit].
-    quantum : float
-        The length of one quantum [joint unit].
+    position : ndarray of int32, shape (n_nodes, d)
+        Coordinates of the nodes' cells in half quanta (:func:`node_positions`).
     layer : ndarray of int32, shape (n_patches,)
         Position of each patch on the global path, -1 off it.
     source, target : int
@@ -373,7 +382,7 @@ def layered_astar(indptr, indices, quanta, node_cell, node_patch, node_cost, nod
     """
     sources = np.full(1, source, np.int64)
     n_touched = _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
-                        clearance, penalty, coords, quantum, layer, sources, target, blocked,
+                        clearance, penalty, position, layer, sources, target, blocked,
                         cost_floor, fields, to_gate_start, rest, landmark_start, landmark_goal,
                         g, pred, closed, touched)
     cost = g[target]

@@ -37,8 +37,8 @@ import threading
 
 import numpy as np
 
-from .astar import (UNREACHED, _half_quanta, adjacency, edge_quanta, gate_distances,
-                    gate_nodes, layered_astar)
+from .astar import (UNREACHED, adjacency, edge_quanta, gate_distances, gate_nodes,
+                    layered_astar, node_positions)
 from ..exceptions import InfeasiblePathError, InvalidInputError
 from ..workspace.segmentation import linked_solutions
 
@@ -97,15 +97,15 @@ class LocalPlanner:
         self._node_slot = np.concatenate([p.slots for p in patches] + [np.zeros(0, np.int64)])
         self._node_patch = np.repeat(np.arange(len(patches), dtype=np.int32), sizes)
         self._indptr, self._indices = adjacency(n_nodes, *self._edges(patches))
-        position = {pid: k for k, pid in enumerate(self._pids.tolist())}
+        index_of = {pid: k for k, pid in enumerate(self._pids.tolist())}
         self._neighbours = [[] for _ in patches]
         for a, b in seg.gates:
-            self._neighbours[position[a]].append(position[b])
-            self._neighbours[position[b]].append(position[a])
+            self._neighbours[index_of[a]].append(index_of[b])
+            self._neighbours[index_of[b]].append(index_of[a])
         self._coords = np.ascontiguousarray(seg.field.grid.coordinates(), dtype=np.float64)
         self._quantum = _lattice_quantum(seg.field.grid.steps)
-        self._quanta = edge_quanta(self._indptr, self._indices, self._node_cell, self._coords,
-                                   self._quantum)
+        self._position = node_positions(self._coords[self._node_cell], self._quantum)
+        self._quanta = edge_quanta(self._indptr, self._indices, self._position)
         self._node_margin = np.abs(seg.field.margin[self._node_cell, self._node_slot])
         # Per clearance weight, costs are filled patch by patch on first use
         # (the clearance of a large 3-D patch takes a while).
@@ -200,7 +200,7 @@ class LocalPlanner:
                 fields[offset:offset + self._offsets[k + 1] - self._offsets[k]] = gate_distances(
                     self._indptr, self._indices, self._quanta, self._node_cell,
                     self._node_patch, self._costed(0.0, k)[0], self._node_margin, clearance,
-                    _LOW_MARGIN_FACTOR, self._coords, self._quantum, self._pids.size, k,
+                    _LOW_MARGIN_FACTOR, self._position, self._pids.size, k,
                     self._patch_nodes(k, other), *work)
             finally:
                 self._work.put(work)
@@ -215,7 +215,7 @@ class LocalPlanner:
         starts = np.array([self._distances_to_gate(fields, filled, k, m, clearance)
                            for k, m in zip(index, index[1:])] + [0], dtype=np.int64)
         starts -= self._offsets[index]
-        last, goal_cell = index[-1], self._node_cell[target]
+        last = index[-1]
         landmark_start = np.array(
             [self._distances_to_gate(fields, filled, last, other, clearance)
              for other in self._neighbours[last]], dtype=np.int64) - self._offsets[last]
@@ -223,8 +223,13 @@ class LocalPlanner:
         rest = np.zeros(len(index), dtype=np.int64)
         if len(index) > 1:
             entry = self._patch_nodes(index[-1], index[-2])
-            rest[-2] = min(_half_quanta(self._coords, self._quantum, c, goal_cell)
-                           for c in self._node_cell[entry].tolist())
+            rest[-2] = np.min(np.abs(self._position[entry].astype(np.int64)
+                                     - self._position[target]).sum(axis=1))
+            # The goal's own cost to that gate, within its patch, bounds
+            # every path entering there; usually far tighter.
+            through = landmark_goal[self._neighbours[last].index(index[-2])]
+            if through < UNREACHED:
+                rest[-2] = max(rest[-2], through)
         for i in range(len(index) - 3, -1, -1):
             entry = self._patch_nodes(index[i + 1], index[i])
             rest[i] = rest[i + 1] + int(np.min(fields[starts[i + 1] + entry]))
@@ -338,8 +343,8 @@ class LocalPlanner:
         try:
             nodes, cost = layered_astar(
                 self._indptr, self._indices, self._quanta, self._node_cell, self._node_patch,
-                costs, self._node_margin, key[1], _LOW_MARGIN_FACTOR, self._coords,
-                self._quantum, layer, source, target, blocked, floor, *heuristic, *work)
+                costs, self._node_margin, key[1], _LOW_MARGIN_FACTOR, self._position, layer,
+                source, target, blocked, floor, *heuristic, *work)
         finally:
             # layered_astar leaves its work arrays as it found them.
             self._work.put(work)

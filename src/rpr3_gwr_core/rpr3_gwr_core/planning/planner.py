@@ -21,8 +21,8 @@ from ..exceptions import InfeasiblePathError, InvalidInputError, ValidationError
 from .global_planning import RoadmapIndex, feasibility, global_paths, longer_paths
 from .local_planning import DEFAULT_CLEARANCE_WEIGHT, LocalPlanner
 from .locate import DEFAULT_MODE_TOL, locate
-from .segments import segments_clear
-from .trajectory import corner_cuts, cut_corners, shortcut, time_parameterize
+from .segments import segments_clear, shortcut_path
+from .trajectory import corner_cuts, cut_corners, time_parameterize
 from .validation import DEFAULT_MAX_STEP, DEFAULT_MIN_MARGIN, validate_path
 
 __all__ = ["PlanOptions", "Plan", "Planner"]
@@ -411,27 +411,15 @@ class Planner:
 
     def _shortcut(self, joints, patches, margins, clearance, split=False):
         """Indices of the waypoints kept when each patch's stretch is shortcut
-        by straight segments (gate crossings stay in place); with ``split``,
-        the jump from the first waypoint straight to the last is not allowed.
-        ``margins`` are the waypoints' (:meth:`_waypoint_margins`)."""
-        # A segment from waypoint i may reach the end of i's run in its patch.
-        changes = np.flatnonzero(np.diff(patches) != 0)
-        run_end = np.append(changes, len(patches) - 1)[np.searchsorted(changes, np.arange(
-            len(patches)))]
-        positive = np.where(margins > 0, margins, np.inf)
-
-        def allowed(i, js):
-            ok = js <= run_end[i]
-            if split and i == 0:
-                ok &= js < len(joints) - 1
-            if ok.any():
-                lowest = np.minimum.accumulate(positive[i:js.max() + 1])[js - i]
-                ok[ok] = self._clear(joints[np.full(ok.sum(), i)], joints[js[ok]],
-                                     np.full(ok.sum(), patches[i]),
-                                     np.minimum(clearance, lowest[ok]))
-            return ok
-
-        return shortcut(joints, allowed)
+        by straight segments (:func:`~.segments.shortcut_path`; gate crossings
+        stay in place); with ``split``, the jump from the first waypoint
+        straight to the last is not allowed.  ``margins`` are the waypoints'
+        (:meth:`_waypoint_margins`)."""
+        seg = self.roadmap.segmentation
+        return shortcut_path(np.ascontiguousarray(joints[:, self._free]),
+                             np.asarray(patches, dtype=np.int64), margins, clearance, split,
+                             _SAMPLES_PER_CELL, self._step, self._lattice, seg.patch,
+                             seg.field.margin)
 
     def _round(self, joints, patches, s, g, clearance, keep):
         """The path with its corners cut (Chaikin) where the cut keeps to the

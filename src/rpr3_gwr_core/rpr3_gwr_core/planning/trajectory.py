@@ -1,10 +1,8 @@
 """Turning a cell path into a joint trajectory: smoothing and timing.
 
-Shortcutting replaces a stretch of a polyline by a straight segment where a
-test of the caller's allows it (the planner's: the segment stays on the
-stretch's patch with the margin it keeps); Chaikin's corner cutting rounds
-chosen corners.  The caller validates the result and puts back what the
-validator refuses.
+Chaikin's corner cutting rounds chosen corners of a polyline (shortcutting,
+which needs the roadmap, is :func:`~.segments.shortcut_path`).  The caller
+validates the result and puts back what the validator refuses.
 
 Timing is a velocity profile along the path's arc length s: the speed
 ``v(s)`` is capped so that no joint moves faster than ``max_velocity``, and
@@ -21,53 +19,7 @@ import numpy as np
 
 from ..exceptions import InvalidInputError
 
-__all__ = ["shortcut", "cut_corners", "corner_cuts", "time_parameterize"]
-
-
-def shortcut(points, allowed, max_passes=3):
-    """Greedy shortcutting of a polyline.
-
-    Parameters
-    ----------
-    points : ndarray, shape (n, d)
-        Path in the grid's coordinates [joint unit].
-    allowed : callable
-        ``allowed(i, js)``, for a point i and an array of later points js,
-        says for each j (array of bool) whether the straight segment from
-        point i to point j may replace the points between them.
-    max_passes : int
-
-    Returns
-    -------
-    ndarray of int
-        Indices of the kept points, first and last included.
-    """
-    keep = list(range(len(points)))
-    for _ in range(max_passes):
-        changed = False
-        out = [keep[0]]
-        i = 0
-        while i < len(keep) - 1:
-            # The longest jump, then halving reaches: O(log n) candidates
-            # per kept point, asked for at once.
-            reaches = [r for r in _halvings(len(keep) - 1 - i) if r > 1]
-            reach = 1
-            if reaches:
-                ok = allowed(keep[i], np.array([keep[i + r] for r in reaches]))
-                if ok.any():
-                    reach, changed = reaches[int(np.argmax(ok))], True
-            i += reach
-            out.append(keep[i])
-        keep = out
-        if not changed:
-            break
-    return np.array(keep)
-
-
-def _halvings(reach):
-    while reach > 1:
-        yield reach
-        reach //= 2
+__all__ = ["cut_corners", "corner_cuts", "time_parameterize"]
 
 
 def cut_corners(points, corners):
