@@ -43,7 +43,7 @@ os.environ.update(FASTRTPS_DEFAULT_PROFILES_FILE=str(PROFILE),
 os.environ.pop("ROS_AUTOMATIC_DISCOVERY_RANGE", None)
 
 import rclpy  # noqa: E402
-from rclpy.executors import MultiThreadedExecutor  # noqa: E402
+from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 from rpr3_gwr_msgs.msg import Configuration  # noqa: E402
 from rpr3_gwr_msgs.srv import PlanPath  # noqa: E402
@@ -113,9 +113,13 @@ def main():
             command += ["--ros-args", "-p", "full:=true"]
         processes.append(subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT))
     rclpy.init()
-    nodes = [Node(f"bench_client_{k}") for k in range(args.clients)]
+    # All clients share this process's executor, which waits on every
+    # entity of every node: parameter services the clients never use would
+    # make each response cost the benchmark eight times their upkeep.
+    nodes = [Node(f"bench_client_{k}", start_parameter_services=False)
+             for k in range(args.clients)]
     clients = [n.create_client(PlanPath, "plan_path") for n in nodes]
-    executor = MultiThreadedExecutor(num_threads=4)
+    executor = SingleThreadedExecutor()
     for n in nodes:
         executor.add_node(n)
     spinner = threading.Thread(target=executor.spin, daemon=True)

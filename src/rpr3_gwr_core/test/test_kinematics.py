@@ -218,6 +218,22 @@ def test_singularity_margin_is_bounded_and_signed_like_det_jx(x, y, alpha):
     assert np.sign(margin) == np.sign(det) == aspect(pose)
 
 
+@settings(max_examples=100, deadline=None)
+@given(coordinate, coordinate, orientation, st.floats(1.0, 30.0), st.floats(1.0, 30.0),
+       st.floats(1.0, 30.0))
+def test_mechanism_margin_and_residual_of_one_pose_agree_with_the_batch(x, y, alpha, r1, r2,
+                                                                        r3):
+    # One pose takes a compiled path of its own (the validator's), a batch numpy's.
+    pose, rho = np.array([x, y, alpha]), np.array([r1, r2, r3])
+    batch = PAPER_GEOMETRY.margin(np.stack([pose, pose]))
+    assert PAPER_GEOMETRY.margin(pose) == pytest.approx(batch[0], rel=1e-12, abs=1e-15)
+    np.testing.assert_allclose(PAPER_GEOMETRY.residual(pose, rho),
+                               PAPER_GEOMETRY.residual(np.stack([pose]), np.stack([rho]))[0],
+                               rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(PAPER_GEOMETRY.residual(pose, rho),
+                               constraint_residual(pose, rho), rtol=1e-12, atol=1e-9)
+
+
 def test_aspect_is_int8_and_vectorised():
     poses = direct_kinematics(np.array([17.0, 20.0, 25.0]))
     signs = aspect(poses)

@@ -43,6 +43,7 @@ import math
 import numbers
 
 import numba
+from numba import types
 from numba.core.types.function_type import CompileResultWAP
 from numba.extending import register_jitable
 import numpy as np
@@ -211,7 +212,10 @@ class Geometry(Mechanism):
         return direct_kinematics_batch(joints, self)
 
     def margin(self, poses):
-        return _singularity_margin(np.asarray(poses, dtype=float), self)
+        poses = np.asarray(poses, dtype=float)
+        if poses.shape == (3,):  # one pose, as the validator asks: no array overhead
+            return np.float64(_pose_margin(self.parameters, self.scale, *poses.tolist()))
+        return _singularity_margin(poses, self)
 
     def predict(self, poses, joints_from, joints_to):
         return _predict(poses, joints_from, joints_to, self)
@@ -220,7 +224,11 @@ class Geometry(Mechanism):
         return _newton(poses, joints, self, iterations)
 
     def residual(self, poses, joints):
-        return _residuals(np.asarray(poses, dtype=float), np.asarray(joints, dtype=float), self)
+        poses, joints = np.asarray(poses, dtype=float), np.asarray(joints, dtype=float)
+        if poses.shape == joints.shape == (3,):
+            return np.array(_leg_residuals(_pose_rows(self.parameters, *poses.tolist()),
+                                           joints.tolist()))
+        return _residuals(poses, joints, self)
 
     def step(self, pose, joints_from, joints_to):
         return _step(self, pose, joints_from, joints_to)
@@ -230,6 +238,8 @@ class Geometry(Mechanism):
         # Its address taken once: passing the dispatcher itself would look it
         # up, under numba's compiler lock, at every call.
         compiled = CompileResultWAP(_step_kernel.overloads[STEP_KERNEL_SIGNATURE.args])
+        # Typed once: numba would otherwise infer its type at every call.
+        compiled._numba_type_ = types.FunctionType(STEP_KERNEL_SIGNATURE)
         return compiled, np.array([*self.parameters, self.scale])
 
     def refine_cusp(self, pose, fixed):
@@ -523,6 +533,25 @@ def _step(geometry, pose, rho_from, rho_to):
 
 
 @numba.njit(cache=True)
+def _pose_rows(parameters, x, y, alpha):
+    return _row_terms(x, y, alpha, parameters)
+
+
+@register_jitable
+def _rows_margin(rows, scale):
+    """:func:`_singularity_margin` from the rows of one pose: 0 with a zero row."""
+    norms = _row_norms(rows, scale)
+    if norms[0] > 0 and norms[1] > 0 and norms[2] > 0:
+        return _normalised_det(rows, norms, scale)
+    return 0.0
+
+
+@numba.njit(cache=True)
+def _pose_margin(parameters, scale, x, y, alpha):
+    return _rows_margin(_row_terms(x, y, alpha, parameters), scale)
+
+
+@numba.njit(cache=True)
 def _compiled_step(parameters, scale, x, y, alpha, r1, r2, r3, t1, t2, t3):
     """:func:`_step` on floats: ``(converged, x, y, alpha, margin)``."""
     rows = _row_terms(x, y, alpha, parameters)
@@ -535,11 +564,7 @@ def _compiled_step(parameters, scale, x, y, alpha, r1, r2, r3, t1, t2, t3):
         rows = _row_terms(x, y, alpha, parameters)
         e1, e2, e3 = _leg_residuals(rows, (t1, t2, t3))
         if max(abs(e1), abs(e2), abs(e3)) < tol:
-            norms = _row_norms(rows, scale)
-            margin = 0.0
-            if norms[0] > 0 and norms[1] > 0 and norms[2] > 0:
-                margin = _normalised_det(rows, norms, scale)
-            return True, x, y, alpha, margin
+            return True, x, y, alpha, _rows_margin(rows, scale)
         (dx, dy, da), det = _adjugate_product(rows, e1, e2, e3)
         if det == 0.0:
             return False, x, y, alpha, 0.0

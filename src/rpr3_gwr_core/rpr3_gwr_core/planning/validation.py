@@ -104,13 +104,13 @@ def validate_path(mechanism, path, start_pose, goal_pose=None,
     -------
     Validation
     """
-    path = np.asarray(path, dtype=float)
+    path = np.ascontiguousarray(path, dtype=float)
     if path.ndim != 2 or path.shape[1] != mechanism.n_joints or path.shape[0] < 1:
         raise InvalidInputError(f"the path must have shape (n, {mechanism.n_joints}), "
                                 f"got {path.shape}")
-    pose = tuple(float(v) for v in np.ravel(start_pose))
-    if not np.all(np.isfinite(path)) or not all(math.isfinite(v) for v in pose) \
-            or len(pose) != mechanism.pose_size:
+    pose = np.array(start_pose, dtype=float).ravel()
+    if not (np.isfinite(path).all() and np.isfinite(pose).all()) \
+            or pose.size != mechanism.pose_size:
         raise InvalidInputError("the path and the start pose must be finite, of the "
                                 "mechanism's sizes")
     if not max_step > 0:
@@ -121,20 +121,20 @@ def validate_path(mechanism, path, start_pose, goal_pose=None,
         return Validation(ok=ok, reason=reason, min_margin=smallest, aspect=sign, steps=steps,
                           poses=poses, failed_segment=segment)
 
-    residual = float(np.max(np.abs(mechanism.residual(np.array(pose), path[0]))))
+    residual = float(np.max(np.abs(mechanism.residual(pose, path[0]))))
     if residual > 1e-6 * mechanism.scale**2:
         return result(False, f"start pose does not fit the first waypoint (residual "
                       f"{residual:.2e})", 0.0, 0)
-    margin = float(mechanism.margin(np.array(pose)))
+    margin = float(mechanism.margin(pose))
     sign = 1 if margin > 0 else -1
     if abs(margin) < min_margin:
         return result(False, f"start is singular (margin {abs(margin):.2e})", abs(margin), sign)
     follow, (kernel, parameters) = _follow, mechanism.step_kernel or (None, None)
     if kernel is None:
         follow, kernel, parameters = _follow.py_func, _interpreted_kernel(mechanism), np.empty(0)
-    followed = np.array(pose)
+    followed = pose.copy()
     status, k, steps, smallest = follow(
-        kernel, parameters, np.ascontiguousarray(path), followed, margin > 0, abs(margin),
+        kernel, parameters, path, followed, margin > 0, abs(margin),
         np.array(mechanism.angular, dtype=np.bool_), max_step, min_margin, poses)
     if status == _CANNOT_FOLLOW:
         return result(False, f"platform cannot follow the joints before waypoint {k}",
@@ -147,7 +147,7 @@ def validate_path(mechanism, path, start_pose, goal_pose=None,
                       f"waypoint {k}", smallest, sign, steps, k)
     pose = followed
     if goal_pose is not None:
-        miss = float(np.max(np.abs(mechanism.pose_difference(np.array(pose), goal_pose))))
+        miss = float(np.max(np.abs(mechanism.pose_difference(pose, goal_pose))))
         if miss > _GOAL_TOL * mechanism.scale:
             return result(False, f"platform ends {miss:.3g} away from the goal pose: "
                           "another assembly mode", smallest, sign, steps)

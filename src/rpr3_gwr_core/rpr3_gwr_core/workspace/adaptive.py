@@ -50,7 +50,7 @@ from scipy.sparse.csgraph import dijkstra
 from ..exceptions import InvalidInputError
 from .continuity import match_solutions
 from .field import compute_field
-from .grid import Axis, Grid, GridBase
+from .grid import Axis, Grid, GridBase, lattice_box
 
 __all__ = ["AdaptiveGrid", "refine", "grid_from_dict", "DEFAULT_REFINEMENT",
            "DEFAULT_REFINE_MARGIN"]
@@ -108,7 +108,7 @@ class AdaptiveGrid(GridBase):
         taken = np.zeros(self.fine_shape, dtype=bool)
         taken[tuple(slice(None, None, r) for _ in self.fine_shape)] = True
         corner = np.stack(np.unravel_index(self.blocks, self.block_shape), axis=1) * r
-        offsets = np.array(list(itertools.product(range(r + 1), repeat=self.ndim)))
+        offsets = lattice_box(self.ndim, 0, r)
         flat = taken.reshape(-1)
         # Blocks in chunks: a block brings (r + 1)**d points.
         for start in range(0, len(corner), 4096):
@@ -284,10 +284,8 @@ class AdaptiveGrid(GridBase):
         steps = np.array(self.steps)
         here = (np.array([joints[a.joint] for a in self.axes]) - low) / steps
         reach = int(math.ceil(radius))
-        fine = np.rint(here).astype(np.int64) + np.array(
-            list(itertools.product(range(-reach, reach + 1), repeat=d)))
-        base = (np.floor(here / r).astype(np.int64) + np.array(
-            list(itertools.product((-1, 0, 1, 2), repeat=d)))) * r
+        fine = np.rint(here).astype(np.int64) + lattice_box(d, -reach, reach)
+        base = (np.floor(here / r).astype(np.int64) + lattice_box(d, -1, 2)) * r
         index = np.unique(np.vstack([fine, base]), axis=0)
         index = index[np.all((index >= 0) & (index < np.array(self.fine_shape)), axis=1)]
         distance = np.linalg.norm(index - here, axis=1)

@@ -20,7 +20,7 @@ from scipy.ndimage import distance_transform_edt
 from ..exceptions import InvalidInputError, OutOfGridError
 from .continuity import neighbour_pairs
 
-__all__ = ["Axis", "GridBase", "Grid", "lattice_cell"]
+__all__ = ["Axis", "GridBase", "Grid", "lattice_box", "lattice_cell"]
 
 
 def _real(value, name):
@@ -300,19 +300,10 @@ class Grid(GridBase):
         -------
         list of int
         """
+        here = np.array([(joints[a.joint] - a.low) / a.step for a in self.axes])
         reach = int(math.ceil(radius))
-        centre = [int(round((joints[a.joint] - a.low) / a.step)) for a in self.axes]
-        offsets = np.array(list(itertools.product(range(-reach, reach + 1), repeat=self.ndim)))
-        index = np.array(centre) + offsets
-        inside = np.all((index >= 0) & (index < np.array(self.shape)), axis=1)
-        index = index[inside]
-        low = np.array([a.low for a in self.axes])
-        steps = np.array(self.steps)
-        here = np.array([joints[a.joint] for a in self.axes])
-        distance = np.linalg.norm((low + index * steps - here) / steps, axis=1)
-        near = distance <= radius
-        cells = np.ravel_multi_index(tuple(index[near].T), self.shape)
-        return cells[np.lexsort((cells, distance[near]))].tolist()
+        return _nearest_points(here, np.array(self.shape), float(radius),
+                               lattice_box(self.ndim, -reach, reach)).tolist()
 
     def to_dict(self):
         """Plain-data form, for JSON and cache keys."""
@@ -330,6 +321,41 @@ class Grid(GridBase):
         except (KeyError, TypeError) as exc:
             raise InvalidInputError(f"malformed grid: {exc}") from exc
 
+
+
+@functools.lru_cache(maxsize=16)
+def lattice_box(ndim, first, last):
+    """Integer offsets from ``first`` to ``last`` on each of ``ndim`` axes,
+    row-major, shape ((last - first + 1)**ndim, ndim); read-only and shared."""
+    box = np.array(list(itertools.product(range(first, last + 1), repeat=ndim)),
+                   dtype=np.int64).reshape(-1, ndim)
+    box.flags.writeable = False
+    return box
+
+
+@numba.njit(cache=True)
+def _nearest_points(here, shape, radius, box):
+    """Row-major flat indices of the lattice points ``round(here) + box`` in
+    ``shape`` within ``radius`` of ``here`` (in steps), nearest first, ties
+    in index order."""
+    flat = np.empty(box.shape[0], np.int64)
+    distance = np.empty(box.shape[0])
+    count = 0
+    for k in range(box.shape[0]):
+        index, squared = 0, 0.0
+        for a in range(here.size):
+            i = int(np.rint(here[a])) + box[k, a]
+            if i < 0 or i >= shape[a]:
+                index = -1
+                break
+            index = index * shape[a] + i
+            squared += (i - here[a]) ** 2
+        if index >= 0 and math.sqrt(squared) <= radius:
+            flat[count], distance[count] = index, math.sqrt(squared)
+            count += 1
+    # The box is row-major, so the points are in index order: a stable sort
+    # keeps it among equal distances.
+    return flat[:count][np.argsort(distance[:count], kind="mergesort")]
 
 
 @numba.njit(cache=True)
