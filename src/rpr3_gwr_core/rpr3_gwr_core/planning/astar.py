@@ -38,8 +38,8 @@ keeps the search near one of them.
 import numba
 import numpy as np
 
-__all__ = ["adjacency", "node_positions", "edge_quanta", "gate_nodes", "gate_distances",
-           "layered_astar",
+__all__ = ["adjacency", "node_positions", "edge_quanta", "gate_nodes", "work_arrays",
+           "gate_distances", "layered_astar",
            "UNREACHED"]
 
 # Cost of a node the search did not reach; far above any path's, with room
@@ -97,7 +97,7 @@ def node_positions(coords, quantum):
     return np.ascontiguousarray(np.rint(2.0 * (coords - low) / quantum), dtype=np.int32)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _half_quanta(position, u, v):
     """L1 distance of two nodes in half quanta."""
     total = 0
@@ -132,73 +132,71 @@ def gate_nodes(indptr, indices, node_patch, first, stop, other):
     return out[:count]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _is_blocked(blocked, cell):
     k = np.searchsorted(blocked, cell)
     return k < blocked.size and blocked[k] == cell
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _node_cost(node_cost, node_margin, clearance, penalty, u):
     return node_cost[u] * penalty if node_margin[u] < clearance else node_cost[u]
 
 
-@numba.njit(cache=True)
-def _estimate(position, node_patch, layer, fields, to_gate_start, rest,
-              landmark_start, landmark_goal, last, cost_floor, goal, v):
-    """The heuristic of node ``v`` (module doc); 0 without a goal."""
-    if cost_floor == 0:
-        return 0
-    length = _half_quanta(position, v, goal)
-    here = layer[node_patch[v]]
-    if here < last:
-        length = max(length, fields[to_gate_start[here] + v] + rest[here])
-    else:
-        for j in range(landmark_start.size):
-            at = fields[landmark_start[j] + v]
-            if at < UNREACHED and landmark_goal[j] < UNREACHED:
-                length = max(length, abs(at - landmark_goal[j]))
-    return cost_floor * length
+def work_arrays(n_nodes, n_links):
+    """The work arrays of one search at a time (:func:`layered_astar`,
+    :func:`gate_distances`), reusable from one search to the next.
 
+    A search pushes a node at most once per link that reaches it and once
+    as a source, so its open set fits in ``n_links + n_nodes`` entries: it
+    never grows them, and numba then keeps no reference counts in its loop
+    (growing arrays there cost a third of the search in atomic counts).
+    Pages are only taken as a search fills them.
 
-@numba.njit(cache=True)
-def _append(nodes, others, count, node, other):
-    """``nodes[count], others[count] = node, other``, the arrays doubled when
-    full; returns them."""
-    if count == nodes.size:
-        nodes = np.concatenate((nodes, np.empty(count, np.int64)))
-        others = np.concatenate((others, np.empty(count, np.int64)))
-    nodes[count], others[count] = node, other
-    return nodes, others
+    Parameters
+    ----------
+    n_nodes, n_links : int
+        Nodes, and directed links (``indices.size`` of :func:`adjacency`).
+
+    Returns
+    -------
+    tuple of ndarray
+        ``g`` (int64, all :data:`UNREACHED`), ``pred`` (int64), ``closed``
+        (uint8, all zero), ``touched`` (int64), each of ``n_nodes``; then
+        the open set's entries (node and next entry, int32), and the nodes
+        (int32) and keys (int64) waiting beyond the ring, each of
+        ``n_links + n_nodes``.
+    """
+    capacity = n_links + n_nodes
+    return (np.full(n_nodes, UNREACHED, np.int64), np.empty(n_nodes, np.int64),
+            np.zeros(n_nodes, np.uint8), np.empty(n_nodes, np.int64),
+            np.empty(capacity, np.int32), np.empty(capacity, np.int32),
+            np.empty(capacity, np.int32), np.empty(capacity, np.int64))
 
 
 @numba.njit(cache=True, nogil=True)
 def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin, clearance,
             penalty, position, layer, sources, target, blocked, cost_floor, fields,
-            to_gate_start, rest, landmark_start, landmark_goal, g, pred, closed, touched):
+            to_gate_start, rest, landmark_start, landmark_goal, g, pred, closed, touched,
+            entry_node, entry_next, waiting_node, waiting_key):
     """Least costs from ``sources`` through the layers, up to ``target`` (all
     reachable nodes when it is -1); returns how many nodes it touched, which
     are the first entries of ``touched``."""
     goal = max(target, 0)
     last = layer[node_patch[target]] if target >= 0 else 0
+    # The ring's buckets are stacks linked through the entries.
     head = np.full(_RING, -1, np.int64)
-    # The ring's buckets are stacks linked through these entries.
-    entry_node = np.empty(1024, np.int64)
-    entry_next = np.empty(1024, np.int64)
     entries = 0
-    waiting_node = np.empty(64, np.int64)
-    waiting_key = np.empty(64, np.int64)
     waiting = 0
     n_touched = 0
+    # Sources cost 0 and are settled first, whatever their estimates: the
+    # keys of the nodes they reach are estimated as usual.
     for s in sources:
         g[s] = 0
         pred[s] = -1
         touched[n_touched] = s
         n_touched += 1
-        waiting_node, waiting_key = _append(
-            waiting_node, waiting_key, waiting, s,
-            _estimate(position, node_patch, layer, fields, to_gate_start,
-                      rest, landmark_start, landmark_goal, last, cost_floor, goal, s))
+        waiting_node[waiting], waiting_key[waiting] = s, 0
         waiting += 1
     pending = 0
     current = 0
@@ -216,8 +214,7 @@ def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_marg
             for w in range(waiting):
                 if waiting_key[w] < current + _RING:
                     bucket = waiting_key[w] % _RING
-                    entry_node, entry_next = _append(entry_node, entry_next, entries,
-                                                     waiting_node[w], head[bucket])
+                    entry_node[entries], entry_next[entries] = waiting_node[w], head[bucket]
                     head[bucket] = entries
                     entries += 1
                     pending += 1
@@ -257,20 +254,28 @@ def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_marg
                     n_touched += 1
                 g[v] = reach
                 pred[v] = u
+                # The estimate (module doc), written out here, its only use:
+                # a call passing these arrays would count references.
+                length = 0
+                if cost_floor:
+                    length = _half_quanta(position, v, goal)
+                    if there < last:
+                        length = max(length, fields[to_gate_start[there] + v] + rest[there])
+                    else:
+                        for j in range(landmark_start.size):
+                            at = fields[landmark_start[j] + v]
+                            if at < UNREACHED and landmark_goal[j] < UNREACHED:
+                                length = max(length, abs(at - landmark_goal[j]))
                 # A consistent estimate never puts a key behind the current one.
-                key = max(current, reach + _estimate(
-                    position, node_patch, layer, fields, to_gate_start, rest,
-                    landmark_start, landmark_goal, last, cost_floor, goal, v))
+                key = max(current, reach + cost_floor * length)
                 if key < current + _RING:
                     bucket = key % _RING
-                    entry_node, entry_next = _append(entry_node, entry_next, entries, v,
-                                                     head[bucket])
+                    entry_node[entries], entry_next[entries] = v, head[bucket]
                     head[bucket] = entries
                     entries += 1
                     pending += 1
                 else:
-                    waiting_node, waiting_key = _append(waiting_node, waiting_key, waiting, v,
-                                                        key)
+                    waiting_node[waiting], waiting_key[waiting] = v, key
                     waiting += 1
     return n_touched
 
@@ -285,7 +290,7 @@ def _reset(g, closed, touched, n_touched):
 @numba.njit(cache=True, nogil=True)
 def gate_distances(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
                    clearance, penalty, position, n_patches, k, sources, g, pred, closed,
-                   touched):
+                   touched, entry_node, entry_next, waiting_node, waiting_key):
     """Least cost from each node of one patch to any of ``sources`` within the
     patch, in the units of :func:`layered_astar`.
 
@@ -302,8 +307,8 @@ def gate_distances(indptr, indices, quanta, node_cell, node_patch, node_cost, no
         Nodes of the patch at cost 0.
     node_cost : ndarray of int64, shape (n_nodes,)
         1 on the patch's nodes.
-    g, pred, closed, touched :
-        Work arrays (:func:`layered_astar`).
+    g, pred, closed, touched, entry_node, entry_next, waiting_node, waiting_key :
+        Work arrays (:func:`work_arrays`).
 
     Returns
     -------
@@ -317,7 +322,8 @@ def gate_distances(indptr, indices, quanta, node_cell, node_patch, node_cost, no
     empty = np.zeros(0, np.int64)
     n_touched = _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
                         clearance, penalty, position, layer, sources, -1, empty, 0,
-                        empty, empty, empty, empty, empty, g, pred, closed, touched)
+                        empty, empty, empty, empty, empty, g, pred, closed, touched,
+                        entry_node, entry_next, waiting_node, waiting_key)
     out = g[first:stop].copy()
     _reset(g, closed, touched, n_touched)
     return out
@@ -327,7 +333,7 @@ def gate_distances(indptr, indices, quanta, node_cell, node_patch, node_cost, no
 def layered_astar(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
                   clearance, penalty, position, layer, source, target, blocked,
                   cost_floor, fields, to_gate_start, rest, landmark_start, landmark_goal, g,
-                  pred, closed, touched):
+                  pred, closed, touched, entry_node, entry_next, waiting_node, waiting_key):
     """Least-cost node path from ``source`` to ``target`` through the layers.
 
     Parameters
@@ -369,9 +375,9 @@ def layered_astar(indptr, indices, quanta, node_cell, node_patch, node_cost, nod
         The last layer's patch's distances to each of its gates, at
         ``fields[landmark_start[j] + v]``, and the target's: within the
         patch a node costs at least their difference.
-    g, pred, closed, touched : ndarray, shape (n_nodes,)
-        Work arrays: ``g`` (int64) all :data:`UNREACHED` and ``closed``
-        (uint8) all zero on entry, and so again on return.
+    g, pred, closed, touched, entry_node, entry_next, waiting_node, waiting_key :
+        Work arrays (:func:`work_arrays`): ``g`` all :data:`UNREACHED` and
+        ``closed`` all zero on entry, and so again on return.
 
     Returns
     -------
@@ -384,7 +390,8 @@ def layered_astar(indptr, indices, quanta, node_cell, node_patch, node_cost, nod
     n_touched = _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
                         clearance, penalty, position, layer, sources, target, blocked,
                         cost_floor, fields, to_gate_start, rest, landmark_start, landmark_goal,
-                        g, pred, closed, touched)
+                        g, pred, closed, touched, entry_node, entry_next, waiting_node,
+                        waiting_key)
     cost = g[target]
     count = 0
     if closed[target]:

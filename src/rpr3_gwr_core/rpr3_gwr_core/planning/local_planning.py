@@ -38,7 +38,7 @@ import threading
 import numpy as np
 
 from .astar import (UNREACHED, adjacency, edge_quanta, gate_distances, gate_nodes,
-                    layered_astar, node_positions)
+                    layered_astar, node_positions, work_arrays)
 from ..exceptions import InfeasiblePathError, InvalidInputError
 from ..workspace.segmentation import linked_solutions
 
@@ -163,9 +163,7 @@ class LocalPlanner:
         try:
             return self._work.get_nowait()
         except queue.Empty:
-            n_nodes = self._node_cell.size
-            return (np.full(n_nodes, UNREACHED, np.int64), np.empty(n_nodes, np.int64),
-                    np.zeros(n_nodes, np.uint8), np.empty(n_nodes, np.int64))
+            return work_arrays(self._node_cell.size, self._indices.size)
 
     def _patch_nodes(self, k, other):
         """Nodes of the patch at index ``k`` joined to the patch at index ``other``."""
