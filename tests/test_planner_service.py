@@ -6,7 +6,6 @@ paper's roadmap messages and a client, spun by one executor thread."""
 import collections
 import math
 import os
-import pathlib
 import signal
 import threading
 import time
@@ -29,6 +28,8 @@ from rpr3_gwr_nodes.profiles import LATCHED_QOS
 from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
 
+from process_tree import children, wait_for_children
+
 D = math.radians
 Q1, Q2 = (17.0, 12.0, 18.0, D(122.82)), (17.0, 10.0, 25.0, D(-24.24))
 MODE_A, MODE_B = (17.0, 20.0, 25.0, D(29.47)), (17.0, 20.0, 25.0, D(96.13))
@@ -45,16 +46,16 @@ def _configuration(values):
 class PlannerUnderTest:
     """A planner node fed the paper's roadmap messages, and a client."""
 
-    def __init__(self, context, **planner_options):
+    def __init__(self, context, namespace="", **planner_options):
         self.stamp = Header(frame_id="rpr3_base")
         self.stamp.stamp.sec, self.stamp.stamp.nanosec = 1_700_000_000, 123
         self.roadmap = build_roadmap(PAPER_GEOMETRY, PAPER_GRID)
         field_msg, roadmap_msg = roadmap_to_msgs(self.roadmap, self.stamp)
-        self.planner = PlannerNode(context=context, **planner_options)
-        self.feeder = Node("roadmap_feeder", context=context)
+        self.planner = PlannerNode(context=context, namespace=namespace, **planner_options)
+        self.feeder = Node("roadmap_feeder", context=context, namespace=namespace)
         self.feeder.create_publisher(NSolutionField, "field", LATCHED_QOS).publish(field_msg)
         self.feeder.create_publisher(WorkspaceRoadmap, "roadmap", LATCHED_QOS).publish(roadmap_msg)
-        self.client = Node("planner_test_client", context=context)
+        self.client = Node("planner_test_client", context=context, namespace=namespace)
         self.plan_client = self.client.create_client(PlanPath, "plan_path")
         self.path_markers = []
         self.client.create_subscription(MarkerArray, "planned_path_markers",
@@ -282,34 +283,19 @@ def test_the_clearance_parameter_sets_the_margin_paths_keep(service):
 
 # --- plans from worker processes ----------------------------------------------------------------
 
-def _plan_workers(count, timeout=TIMEOUT):
-    """The processes this one forked (the planner's workers), once there are ``count``."""
-    mine = pathlib.Path("/proc/self/cmdline").read_bytes()
-    deadline = time.monotonic() + timeout
-    while True:
-        children = []
-        for stat in pathlib.Path("/proc").glob("[0-9]*/stat"):
-            try:
-                parent = int(stat.read_text().rsplit(")", 1)[1].split()[1])
-                if parent == os.getpid() and (stat.parent / "cmdline").read_bytes() == mine:
-                    children.append(int(stat.parent.name))
-            except (OSError, ValueError, IndexError):
-                continue  # a process that ended meanwhile
-        if len(children) >= count or time.monotonic() > deadline:
-            return children
-        time.sleep(0.05)
-
-
 def _positions(response):
     return np.array([p.positions for p in response.trajectory.points])
 
 
 @pytest.mark.parametrize("count", [0, 2])
 def test_plans_from_workers_and_from_the_node_are_the_same(ros_context, count):
-    service = PlannerUnderTest(ros_context, parameter_overrides=[
+    earlier = children()
+    # A namespace of its own: the module's planner would also take this
+    # roadmap, and fork workers of its own.
+    service = PlannerUnderTest(ros_context, f"workers_{count}", parameter_overrides=[
         Parameter("plan_workers", value=count)])
     try:
-        assert len(_plan_workers(count, timeout=TIMEOUT if count else 1.0)) == count
+        assert len(wait_for_children(count, earlier, timeout=TIMEOUT if count else 1.0)) == count
         for start, goal in ((Q1, Q2), (MODE_A, MODE_B)):
             response = service.plan(start, goal)
             assert response.success, response.error_msg
@@ -326,10 +312,11 @@ def test_plans_from_workers_and_from_the_node_are_the_same(ros_context, count):
 
 
 def test_killed_plan_workers_leave_the_node_planning_in_its_own_process(ros_context):
-    service = PlannerUnderTest(ros_context, parameter_overrides=[
+    earlier = children()
+    service = PlannerUnderTest(ros_context, "killed_workers", parameter_overrides=[
         Parameter("plan_workers", value=2)])
     try:
-        workers = _plan_workers(2)
+        workers = wait_for_children(2, earlier)
         assert len(workers) == 2
         before = service.plan(Q1, Q2)
         assert before.success, before.error_msg

@@ -1,6 +1,11 @@
 """Planning on the paper's roadmap: its two examples, errors, and properties."""
 
+import json
 import math
+import os
+import signal
+import subprocess
+import sys
 
 import networkx as nx
 import numpy as np
@@ -359,3 +364,63 @@ def test_gate_distances_are_kept_for_the_latest_clearances_only(paper_roadmap):
     for clearance in (0.0, 0.01, 0.02, 0.03, 0.04, 0.02):
         local.prepare(clearance)
     assert list(local._to_gate) == [0.01, 0.03, 0.04, 0.02]
+
+
+# --- what a forked worker process needs (the planner node forks them) --------------------------
+
+_WARM_UP_CHECK = """
+import importlib, json, math, pkgutil
+from numba.core.registry import CPUDispatcher
+import rpr3_gwr_core
+from rpr3_gwr_core.exceptions import GWRError
+from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID
+from rpr3_gwr_core.planning import PlanOptions, Planner
+from rpr3_gwr_core.workspace.roadmap import build_roadmap
+
+planner = Planner(build_roadmap(PAPER_GEOMETRY, PAPER_GRID))
+planner.warm_up()
+kernels = {}
+for info in pkgutil.walk_packages(rpr3_gwr_core.__path__, "rpr3_gwr_core."):
+    for name, value in vars(importlib.import_module(info.name)).items():
+        if isinstance(value, CPUDispatcher):
+            kernels[value] = len(value.overloads)
+D = math.radians
+pairs = [((17, 12, 18, D(122.82)), (17, 10, 25, D(-24.24))),
+         ((17, 20, 25, D(29.47)), (17, 20, 25, D(96.13))),
+         ((17, 12, 18, D(122.82)), (17, 20, 25, D(96.13)))]
+for options in (PlanOptions(), PlanOptions(smooth=True, max_velocity=1.0, max_acceleration=2.0),
+                PlanOptions(feasibility_only=True), PlanOptions(weighted=True, clearance=0.05)):
+    for start, goal in pairs:
+        try:
+            planner.plan(start, goal, options)
+        except GWRError:
+            pass
+print(json.dumps(sorted(k.py_func.__qualname__ for k, n in kernels.items()
+                        if len(k.overloads) > n)))
+"""
+
+
+def test_warm_up_loads_every_kernel_a_plan_uses():
+    # A fresh interpreter: this one has loaded every kernel long ago.
+    run = subprocess.run([sys.executable, "-c", _WARM_UP_CHECK], capture_output=True, text=True,
+                         timeout=600)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert json.loads(run.stdout.splitlines()[-1]) == []
+
+
+def test_a_process_forked_while_the_planner_is_busy_can_plan(paper_roadmap):
+    planner = Planner(paper_roadmap)
+    planner.plan(Q1, Q2)
+    # Another thread inside the local planner's lock at the fork.
+    with planner.local._lock:
+        pid = os.fork()
+        if pid == 0:
+            signal.alarm(60)  # a deadlocked child dies of it
+            try:
+                # A new clearance takes the lock to set up its gate distances.
+                planner.plan(Q1, Q2, PlanOptions(clearance=0.031))
+                os._exit(0)
+            finally:
+                os._exit(1)
+    _, status = os.waitpid(pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 0

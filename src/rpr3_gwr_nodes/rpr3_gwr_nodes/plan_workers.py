@@ -8,23 +8,29 @@ processes each hold the planner and plan whole requests in parallel; the
 node's threads wait for them and convert their plans to messages.
 
 The workers are forked from the node's process once its planner is built,
-warmed up and prepared, by the thread that built it and before any other
-thread uses that planner, so none of its locks can be held in a child, and
-the children share the roadmap (copy on write) and the compiled kernels.
-They never touch ROS.  They ignore SIGINT (the node stops them) and are sent
-SIGTERM when the thread that forked them ends (``PR_SET_PDEATHSIG``), so
-they do not outlive a node that is killed.
+warmed up (every compiled kernel loaded: a child never needs numba's
+compiler lock, which another thread may have held at the fork) and its gate
+distances computed, so the children share the roadmap, the distances (copy
+on write) and the kernels.  The local planner's own lock is renewed in a
+child (:mod:`rpr3_gwr_core.planning.local_planning`), as requests may be
+using the planner in the node's threads meanwhile.  Workers never touch ROS.
+They ignore SIGINT (the node stops them once its requests are answered) and
+end when they find the node's process gone (killed, without a shutdown), so
+they do not outlive it holding the roadmap's memory.
 """
 
 import concurrent.futures
-import ctypes
 import multiprocessing
+import os
 import signal
+import threading
+import time
 import warnings
 
 __all__ = ["PlanWorkers", "WorkersClosed"]
 
-_PR_SET_PDEATHSIG = 1
+# How often a worker looks for its node's process [s].
+_WATCH_PERIOD = 1.0
 # The planner a worker serves, set once when it starts.
 _planner = None
 
@@ -39,7 +45,7 @@ class PlanWorkers:
     Parameters
     ----------
     planner : rpr3_gwr_core.planning.Planner
-        Built and warmed up, used by no other thread while this forks.
+        Warmed up (:meth:`~rpr3_gwr_core.planning.Planner.warm_up`).
     count : int
         Number of worker processes, 1 at least.
     timeout : float
@@ -50,7 +56,7 @@ class PlanWorkers:
         self.timeout = timeout
         self._pool = concurrent.futures.ProcessPoolExecutor(
             count, mp_context=multiprocessing.get_context("fork"), initializer=_adopt,
-            initargs=(planner,))
+            initargs=(planner, os.getpid()))
         with warnings.catch_warnings():
             # Python 3.12 warns of any fork from a threaded process: the
             # module doc says why this one is safe.
@@ -85,15 +91,20 @@ class PlanWorkers:
         self._pool.shutdown(wait=False)
 
 
-def _adopt(planner):
+def _adopt(planner, node_process):
     global _planner
     _planner = planner
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    try:
-        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
-    except (OSError, AttributeError):
-        pass  # not Linux: the workers end with the pool's shutdown only
+    threading.Thread(target=_watch, args=(node_process,), daemon=True).start()
+
+
+def _watch(node_process):
+    # An orphan's parent is another process; its queues would never close,
+    # as the workers hold their ends too.
+    while os.getppid() == node_process:
+        time.sleep(_WATCH_PERIOD)
+    os._exit(0)
 
 
 def _started():

@@ -181,7 +181,7 @@ class PlannerNode(Node):
         if previous is not None and previous.workers is not None:
             previous.workers.close()
         try:
-            _warm_up(planner)
+            planner.warm_up()
         except Exception as exc:  # a bug there must not take the node down
             self.get_logger().warning(f"the warm-up plan failed: {exc!r}")
         self._start_workers(planner, roadmap.header.stamp)
@@ -284,24 +284,6 @@ class PlannerNode(Node):
 
     def _header(self):
         return Header(stamp=self.get_clock().now().to_msg(), frame_id=BASE_FRAME)
-
-
-def _warm_up(planner):
-    """Plan once inside the first patch, so the compiled kernels are loaded
-    (or, on a cold numba cache, compiled: seconds) now rather than during the
-    first request; requests meanwhile are served."""
-    seg = planner.roadmap.segmentation
-    patch = seg.patches[min(seg.patches)]
-    mechanism, field = planner.roadmap.mechanism, seg.field
-    ends = [(int(patch.cells[k]), int(patch.slots[k]))
-            for k in (patch.cells.size // 3, 2 * patch.cells.size // 3)]
-    start, goal = ((*planner.roadmap.grid.joints_of(cell),
-                    float(field.poses[cell, slot, mechanism.mode_coordinate]))
-                   for cell, slot in ends)
-    try:
-        planner.plan(start, goal)
-    except GWRError:
-        pass  # the kernels it reached are compiled all the same
 
 
 def _named(state):

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from ..exceptions import InfeasiblePathError, InvalidInputError, ValidationError
+from ..exceptions import GWRError, InfeasiblePathError, InvalidInputError, ValidationError
 from .global_planning import RoadmapIndex, feasibility, global_paths, longer_paths
 from .local_planning import DEFAULT_CLEARANCE_WEIGHT, LocalPlanner
 from .locate import DEFAULT_MODE_TOL, locate
@@ -191,6 +191,31 @@ class Planner:
         self._free = list(roadmap.grid.axis_joints)
         self._step = roadmap.grid.step
         self._lattice = roadmap.grid.lattice
+
+    def warm_up(self):
+        """Load every compiled kernel a plan can use (or, on a cold numba
+        cache, compile them: seconds) now rather than during a first
+        request: a plan inside the first patch, smoothed and timed, and a
+        segment test for the corners that plan may not have.
+
+        A process forked afterwards finds them loaded, and never needs
+        numba's compiler lock, which another thread of the parent may have
+        held at the fork.
+        """
+        seg = self.roadmap.segmentation
+        patch = seg.patches[min(seg.patches)]
+        cells = patch.cells[[patch.cells.size // 3, 2 * patch.cells.size // 3]]
+        slots = patch.slots[[patch.cells.size // 3, 2 * patch.cells.size // 3]]
+        k = self.roadmap.mechanism.mode_coordinate
+        start, goal = ((*self.roadmap.grid.joints_of(int(cell)),
+                        float(seg.field.poses[cell, slot, k])) for cell, slot in zip(cells, slots))
+        try:
+            self.plan(start, goal, PlanOptions(smooth=True, max_velocity=1.0,
+                                               max_acceleration=1.0))
+        except GWRError:
+            pass  # the kernels it reached are loaded all the same
+        joints = self._joints[cells]
+        self._clear(joints[:1], joints[1:], [patch.id], [0.0])
 
     def locate(self, configuration, mode_tol=DEFAULT_MODE_TOL):
         """:func:`~rpr3_gwr_core.planning.locate.locate` of a configuration:
