@@ -15,8 +15,9 @@ profile, a domain of their own), then:
   planner's "planning on a new roadmap" line (transport of the field and
   roadmap messages plus the planner's rebuild of its state);
 * round trips of PlanPath for the paper's two examples (alternating),
-  first from one client, then from ``--clients`` concurrent clients each in a
-  node and thread of its own: p50, p95 and throughput.
+  first from one client, then from ``--clients`` concurrent clients, each a
+  node of its own called from a thread of its own, all spun by one
+  single-threaded executor: p50, p95 and throughput.
 """
 
 import argparse
