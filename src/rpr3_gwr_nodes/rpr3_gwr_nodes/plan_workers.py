@@ -63,8 +63,12 @@ class PlanWorkers:
             warnings.simplefilter("ignore", DeprecationWarning)
             # The first submission forks every worker, from this thread.
             started = [self._pool.submit(_started) for _ in range(count)]
-        for future in started:
-            future.result(timeout)
+        try:
+            for future in started:
+                future.result(timeout)
+        except BaseException:
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            raise
 
     def plan(self, start, goal, options):
         """``Planner.plan`` in a worker.

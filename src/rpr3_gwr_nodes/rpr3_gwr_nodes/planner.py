@@ -183,7 +183,10 @@ class PlannerNode(Node):
         try:
             planner.warm_up()
         except Exception as exc:  # a bug there must not take the node down
-            self.get_logger().warning(f"the warm-up plan failed: {exc!r}")
+            # Nor fork workers that might need numba's compiler lock.
+            self.get_logger().error(f"the warm-up failed, planning in the node's process: "
+                                    f"{exc!r}")
+            return
         self._start_workers(planner, roadmap.header.stamp)
 
     def _start_workers(self, planner, stamp):
