@@ -338,13 +338,14 @@ def _nearest_points(here, shape, radius, box):
     """Row-major flat indices of the lattice points ``round(here) + box`` in
     ``shape`` within ``radius`` of ``here`` (in steps), nearest first, ties
     in index order."""
+    centre = np.rint(here).astype(np.int64)
     flat = np.empty(box.shape[0], np.int64)
     distance = np.empty(box.shape[0])
     count = 0
     for k in range(box.shape[0]):
         index, squared = 0, 0.0
         for a in range(here.size):
-            i = int(np.rint(here[a])) + box[k, a]
+            i = centre[a] + box[k, a]
             if i < 0 or i >= shape[a]:
                 index = -1
                 break
