@@ -5,6 +5,8 @@ paper's roadmap messages and a client, spun by one executor thread."""
 
 import collections
 import math
+import os
+import signal
 import threading
 import time
 
@@ -16,6 +18,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rpr3_gwr_core.mechanisms.rpr3 import direct_kinematics
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID
+from rpr3_gwr_core.planning import Planner
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
 from rpr3_gwr_msgs.msg import Configuration, NSolutionField, WorkspaceRoadmap
 from rpr3_gwr_msgs.srv import PlanPath
@@ -24,6 +27,8 @@ from rpr3_gwr_nodes.planner import PlannerNode
 from rpr3_gwr_nodes.profiles import LATCHED_QOS
 from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
+
+from process_tree import children, wait_for_children
 
 D = math.radians
 Q1, Q2 = (17.0, 12.0, 18.0, D(122.82)), (17.0, 10.0, 25.0, D(-24.24))
@@ -41,16 +46,16 @@ def _configuration(values):
 class PlannerUnderTest:
     """A planner node fed the paper's roadmap messages, and a client."""
 
-    def __init__(self, context):
+    def __init__(self, context, namespace="", **planner_options):
         self.stamp = Header(frame_id="rpr3_base")
         self.stamp.stamp.sec, self.stamp.stamp.nanosec = 1_700_000_000, 123
-        roadmap = build_roadmap(PAPER_GEOMETRY, PAPER_GRID)
-        field_msg, roadmap_msg = roadmap_to_msgs(roadmap, self.stamp)
-        self.planner = PlannerNode(context=context)
-        self.feeder = Node("roadmap_feeder", context=context)
+        self.roadmap = build_roadmap(PAPER_GEOMETRY, PAPER_GRID)
+        field_msg, roadmap_msg = roadmap_to_msgs(self.roadmap, self.stamp)
+        self.planner = PlannerNode(context=context, namespace=namespace, **planner_options)
+        self.feeder = Node("roadmap_feeder", context=context, namespace=namespace)
         self.feeder.create_publisher(NSolutionField, "field", LATCHED_QOS).publish(field_msg)
         self.feeder.create_publisher(WorkspaceRoadmap, "roadmap", LATCHED_QOS).publish(roadmap_msg)
-        self.client = Node("planner_test_client", context=context)
+        self.client = Node("planner_test_client", context=context, namespace=namespace)
         self.plan_client = self.client.create_client(PlanPath, "plan_path")
         self.path_markers = []
         self.client.create_subscription(MarkerArray, "planned_path_markers",
@@ -274,3 +279,55 @@ def test_the_clearance_parameter_sets_the_margin_paths_keep(service):
         assert response.min_singularity_margin >= 0.005
     finally:
         node.set_parameters([Parameter("clearance", value=default)])
+
+
+# --- plans from worker processes ----------------------------------------------------------------
+
+def _positions(response):
+    return np.array([p.positions for p in response.trajectory.points])
+
+
+@pytest.mark.parametrize("count", [0, 2])
+def test_plans_from_workers_and_from_the_node_are_the_same(ros_context, count):
+    earlier = children()
+    # A namespace of its own: the module's planner would also take this
+    # roadmap, and fork workers of its own.
+    service = PlannerUnderTest(ros_context, f"workers_{count}", parameter_overrides=[
+        Parameter("plan_workers", value=count)])
+    try:
+        assert len(wait_for_children(count, earlier, timeout=TIMEOUT if count else 1.0)) == count
+        for start, goal in ((Q1, Q2), (MODE_A, MODE_B)):
+            response = service.plan(start, goal)
+            assert response.success, response.error_msg
+            expected = Planner(service.roadmap).plan(start, goal)
+            np.testing.assert_allclose(_positions(response), expected.joints, rtol=0, atol=1e-12)
+        refused = service.plan((17.0, 20.0, 25.0, D(60.0)), MODE_B)
+        assert refused.error_code == PlanPath.Response.ERROR_NO_ASSEMBLY_MODE, refused.error_msg
+        # An error's attributes cross from a worker too.
+        infeasible = service.plan(Q1, MODE_B)
+        assert infeasible.error_code == PlanPath.Response.ERROR_INFEASIBLE
+        assert infeasible.feasibility == PlanPath.Response.FEASIBILITY_OTHER_ASPECT
+    finally:
+        service.close()
+
+
+def test_killed_plan_workers_leave_the_node_planning_in_its_own_process(ros_context):
+    earlier = children()
+    service = PlannerUnderTest(ros_context, "killed_workers", parameter_overrides=[
+        Parameter("plan_workers", value=2)])
+    try:
+        workers = wait_for_children(2, earlier)
+        assert len(workers) == 2
+        before = service.plan(Q1, Q2)
+        assert before.success, before.error_msg
+        for pid in workers:
+            os.kill(pid, signal.SIGKILL)
+        for _ in range(3):
+            after = service.plan(Q1, Q2)
+            assert after.success, after.error_msg
+            np.testing.assert_array_equal(_positions(after), _positions(before))
+        infeasible = service.plan(Q1, MODE_B)
+        assert infeasible.error_code == PlanPath.Response.ERROR_INFEASIBLE
+        assert infeasible.feasibility == PlanPath.Response.FEASIBILITY_OTHER_ASPECT
+    finally:
+        service.close()

@@ -19,7 +19,7 @@ from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import Configuration, NSolutionField, WorkspaceRoadmap
 from rpr3_gwr_msgs.srv import PlanPath, ResetDriver
 from rpr3_gwr_nodes.planner import PlannerNode
-from rpr3_gwr_nodes.profiles import LATCHED_QOS
+from rpr3_gwr_nodes.profiles import LATCHED_QOS, SERVICE_QOS
 from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
 from rpr3_gwr_nodes.rpr3_driver import Rpr3Driver
 from rpr3_gwr_nodes.trajectory_recorder import TrajectoryRecorder
@@ -271,7 +271,10 @@ def test_late_subscriber_receives_the_roadmap(suite):
 
 def test_concurrent_clients_lose_no_request(suite):
     clients = [suite.add(Node(f"load_client_{k}", context=suite.context)) for k in range(8)]
-    services = [c.create_client(PlanPath, "plan_path") for c in clients]
+    # The service's own depth: with the clients' default history (the last 10)
+    # one request in a few thousand never reached the planner at this rate.
+    services = [c.create_client(PlanPath, "plan_path", qos_profile=SERVICE_QOS)
+                for c in clients]
     outcomes = []
     lock = threading.Lock()
 

@@ -2,6 +2,8 @@
 
 import json
 import math
+import os
+import signal
 import subprocess
 import sys
 
@@ -364,7 +366,7 @@ def test_gate_distances_are_kept_for_the_latest_clearances_only(paper_roadmap):
     assert list(local._to_gate) == [0.01, 0.03, 0.04, 0.02]
 
 
-# --- the planner's warm-up ----------------------------------------------------------------------
+# --- what a forked worker process needs (the planner node forks them) --------------------------
 
 _WARM_UP_CHECK = """
 import importlib, json, math, pkgutil
@@ -404,3 +406,21 @@ def test_warm_up_loads_every_kernel_a_plan_uses():
                          timeout=600)
     assert run.returncode == 0, run.stderr[-2000:]
     assert json.loads(run.stdout.splitlines()[-1]) == []
+
+
+def test_a_process_forked_while_the_planner_is_busy_can_plan(paper_roadmap):
+    planner = Planner(paper_roadmap)
+    planner.plan(Q1, Q2)
+    # Another thread inside the local planner's lock at the fork.
+    with planner.local._lock:
+        pid = os.fork()
+        if pid == 0:
+            signal.alarm(60)  # a deadlocked child dies of it
+            try:
+                # A new clearance takes the lock to set up its gate distances.
+                planner.plan(Q1, Q2, PlanOptions(clearance=0.031))
+                os._exit(0)
+            finally:
+                os._exit(1)
+    _, status = os.waitpid(pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 0

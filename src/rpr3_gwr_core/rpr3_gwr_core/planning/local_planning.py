@@ -32,8 +32,10 @@ in several threads plan at once.
 import collections
 from dataclasses import dataclass
 import math
+import os
 import queue
 import threading
+import weakref
 
 import numpy as np
 
@@ -53,6 +55,17 @@ _COST_UNITS = 8
 # Clearances whose gate distances are kept (a full 3-DOF roadmap's take up to
 # 180 MB each).
 _KEPT_CLEARANCES = 4
+# Every local planner, so that a process forked while another thread held one's
+# lock gets a free one (the logging module does the same for its handlers).
+_PLANNERS = weakref.WeakSet()
+
+
+def _renew_locks():
+    for planner in _PLANNERS:
+        planner._lock = threading.Lock()
+
+
+os.register_at_fork(after_in_child=_renew_locks)
 
 
 @dataclass(frozen=True)
@@ -124,6 +137,7 @@ class LocalPlanner:
         self._to_gate = collections.OrderedDict()
         self._gate_nodes = {}
         self._lock = threading.Lock()
+        _PLANNERS.add(self)
         self._work = queue.SimpleQueue()
 
     def _edges(self, patches):

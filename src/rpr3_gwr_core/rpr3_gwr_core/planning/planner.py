@@ -197,6 +197,10 @@ class Planner:
         cache, compile them: seconds) now rather than during a first
         request: a plan inside the first patch, smoothed and timed, and a
         segment test for the corners that plan may not have.
+
+        A process forked afterwards finds them loaded, and never needs
+        numba's compiler lock, which another thread of the parent may have
+        held at the fork.
         """
         seg = self.roadmap.segmentation
         patch = seg.patches[min(seg.patches)]
