@@ -94,6 +94,8 @@ def plan_to_trajectory(plan, header):
     return trajectory
 
 
+# Cores of the machine: one plan worker each by default, two executor threads.
+_CORES = os.cpu_count() or 1
 # Longest wait for a worker's plan [s]: the full 3-DOF roadmap's slowest
 # plans take seconds.
 _WORKER_TIMEOUT = 120.0
@@ -127,7 +129,7 @@ class PlannerNode(Node):
                         "locus wherever the roadmap allows; they keep a quarter of it in "
                         "validation, or what the start and goal allow",
             floating_point_range=[FloatingPointRange(from_value=0.0, to_value=0.5)]))
-        self.declare_parameter("plan_workers", os.cpu_count() or 1, ParameterDescriptor(
+        self.declare_parameter("plan_workers", _CORES, ParameterDescriptor(
             description="Processes that plan requests, forked with each new roadmap and "
                         "sharing it; 0 plans in the node's process",
             integer_range=[IntegerRange(from_value=0, to_value=64, step=1)], read_only=True))
@@ -320,4 +322,4 @@ def main(args=None):
     # Two threads per core: a thread waits while a worker plans, and converts
     # the plan to messages while the worker plans the next request (8
     # clients on 2 cores: 188 requests/s with 2 threads, 242 with 4, 243 with 6).
-    run(PlannerNode, MultiThreadedExecutor, args, num_threads=2 * (os.cpu_count() or 1))
+    run(PlannerNode, MultiThreadedExecutor, args, num_threads=2 * _CORES)
