@@ -2,31 +2,96 @@
 
 The only module of the core that touches the file system: the CLI and the
 nodes use it so that a second call with the same mechanism and grid loads the
-roadmap instead of rebuilding it.  An entry is a folder of ``.npy`` files,
-one per array of :func:`~rpr3_gwr_core.io.export.roadmap_arrays`, with the
-mechanism and grid documents in ``header.json``, written to a temporary
-folder and renamed into place: the full 3-DOF roadmap's arrays (about
-400 MB) load in a tenth of a second from the page cache, without the
-checksums and copies of a zip archive.
+roadmap instead of rebuilding it.
+
+Entries
+-------
+An entry is a folder named by :func:`cache_key` holding one ``.npy`` file per
+array of :func:`~rpr3_gwr_core.io.export.roadmap_arrays` (``links`` as
+``links_0``, ``links_1``, ...) and ``header.json``: the mechanism and grid
+documents, each array's dtype, shape and CRC-32, and a CRC-32 of the header
+itself.  It is written to a staging folder (``<key>.<random>.tmp``) and
+renamed into place, so a reader finds an entry whole or not at all: the full
+3-DOF roadmap's arrays (about 400 MB) are read and checked in about 0.2 s from
+the page cache, without the copies of a zip archive.
+
+Integrity
+---------
+A load checks that the header is well formed, passes its checksum and
+describes the requested mechanism and grid; that each array has the listed
+dtype and shape and passes its checksum; then the values the compiled passes
+rely on and :func:`~rpr3_gwr_core.io.export.roadmap_from_arrays` does not
+check: counts within ``0..max_solutions``, poses and margins finite exactly
+where a solution exists, a sample of margins equal to the mechanism's margin
+of their poses (a flipped sign would flip an aspect), region ids non-negative
+and 0 on cells without solutions, patch ids 0 where there is no solution.
+An entry that fails is removed and rebuilt, with a :class:`CacheWarning`
+naming the entry and what failed.  The checksums are CRC-32 (:mod:`zlib`)
+rather than a cryptographic hash: they are there to catch damage, not
+tampering (whoever can write an entry can rewrite its header too), and
+over the full 3-DOF roadmap's arrays CRC-32 takes about 0.1 s, SHA-256 0.4 s.
+
+Size bound
+----------
+Whenever an entry is stored, the least recently used entries (loading an
+entry touches its folder) are removed until the entries total at most
+``max_bytes`` (:func:`default_max_bytes`: ``$RPR3_GWR_CACHE_MAX_BYTES``, else
+:data:`DEFAULT_MAX_BYTES`, 4 GiB: the full 3-DOF roadmap's entry of about
+400 MB and about a hundred 36 MB entries of 0.125 slices).  The entry just
+stored is kept even if it alone exceeds the bound.  Only folders named as
+entries count and are removed; staging folders are left to the processes
+writing them unless they are older than :data:`STALE_STAGING_SECONDS` (left
+by a process that died).  Entries that other processes remove meanwhile are
+skipped.
+
+Unwritable cache
+----------------
+When the cache folder cannot be created or written (read-only, full, a file
+in the way), the roadmap is built and returned without being stored, with a
+:class:`CacheWarning`.
 """
 
 import hashlib
 import json
+import numbers
 import os
+import re
 import shutil
 import tempfile
 import time
+import warnings
+import zlib
 
 import numpy as np
 
 from ..exceptions import InvalidInputError
 from ..workspace import build_roadmap, refine
-from .export import FORMAT, VERSION, roadmap_arrays, roadmap_from_arrays
+from .export import FIELD_TYPES, FORMAT, VERSION, roadmap_arrays, roadmap_from_arrays
 
-__all__ = ["default_cache_dir", "cache_key", "cached_roadmap"]
+__all__ = ["CacheWarning", "DEFAULT_MAX_BYTES", "STALE_STAGING_SECONDS", "default_cache_dir",
+           "default_max_bytes", "cache_key", "cached_roadmap"]
 
 # Bump when a change of the algorithms changes roadmaps, so old entries are not reused.
 ALGORITHM_REVISION = 4
+# Bump when the files of an entry change, so old entries are misses (evicted in
+# their turn) rather than damaged entries.
+ENTRY_LAYOUT = 2
+
+DEFAULT_MAX_BYTES = 4 * 2**30
+"""Default bound of the cache's entries [bytes]."""
+
+STALE_STAGING_SECONDS = 600.0
+"""Age past which a staging folder is taken as abandoned [s]; writing the
+largest entry takes seconds."""
+
+_LINK_TYPE = "<i1"
+_MARGIN_SAMPLES = 4096
+_ENTRY_NAME = re.compile(r"[0-9a-f]{24}")
+_STAGING_NAME = re.compile(r"[0-9a-f]{24}\..+\.tmp")
+
+
+class CacheWarning(UserWarning):
+    """A cache entry was damaged and rebuilt, or the cache cannot be written."""
 
 
 def default_cache_dir():
@@ -37,16 +102,39 @@ def default_cache_dir():
     return os.path.join(base, "rpr3-gwr")
 
 
+def default_max_bytes():
+    """``$RPR3_GWR_CACHE_MAX_BYTES``, else :data:`DEFAULT_MAX_BYTES` [bytes].
+
+    Raises
+    ------
+    InvalidInputError
+        If the variable is set but not a non-negative integer.
+    """
+    text = os.environ.get("RPR3_GWR_CACHE_MAX_BYTES")
+    if not text:
+        return DEFAULT_MAX_BYTES
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise InvalidInputError(f"RPR3_GWR_CACHE_MAX_BYTES must be a non-negative integer "
+                                f"number of bytes, got {text!r}")
+    return value
+
+
 def cache_key(mechanism, grid, method="components", min_region_cells=8, refinement=None):
     """Hex digest identifying a roadmap build."""
     text = json.dumps({"format": FORMAT, "version": VERSION, "revision": ALGORITHM_REVISION,
-                       "mechanism": mechanism.to_dict(), "grid": grid.to_dict(),
-                       "method": method, "min_region_cells": min_region_cells,
-                       "refinement": refinement}, sort_keys=True)
+                       "layout": ENTRY_LAYOUT, "mechanism": mechanism.to_dict(),
+                       "grid": grid.to_dict(), "method": method,
+                       "min_region_cells": min_region_cells, "refinement": refinement},
+                      sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
-def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=None):
+def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=None,
+                   max_bytes=None):
     """Load a roadmap from the cache, or build and store it.
 
     Parameters
@@ -60,20 +148,51 @@ def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=No
     refinement : int, optional
         Build on ``refine(mechanism, grid, refinement)`` (an adaptive grid)
         instead of ``grid`` itself.
+    max_bytes : int, optional
+        Bound of the cache's entries after storing one [bytes] (module doc);
+        defaults to :func:`default_max_bytes`.
 
     Returns
     -------
     roadmap : Roadmap
     hit : bool
         Whether it came from the cache.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``max_bytes``, or ``$RPR3_GWR_CACHE_MAX_BYTES`` when it is not
+        given, is not a non-negative integer.
+
+    Warns
+    -----
+    CacheWarning
+        When an entry is damaged (it is rebuilt) or the roadmap cannot be
+        stored (it is returned all the same).
     """
+    if max_bytes is None:
+        max_bytes = default_max_bytes()
+    elif isinstance(max_bytes, bool) or not isinstance(max_bytes, numbers.Integral) \
+            or max_bytes < 0:
+        raise InvalidInputError(f"max_bytes must be a non-negative integer, got {max_bytes!r}")
     directory = cache_dir or default_cache_dir()
-    path = os.path.join(directory, cache_key(mechanism, grid, refinement=refinement))
+    key = cache_key(mechanism, grid, refinement=refinement)
+    path = os.path.join(directory, key)
     if os.path.isdir(path):
         try:
-            return _load(path), True
-        except (InvalidInputError, OSError, ValueError, KeyError):
-            shutil.rmtree(path, ignore_errors=True)  # a damaged entry is rebuilt below
+            roadmap = _load(path, mechanism, grid, refinement)
+        except (InvalidInputError, OSError, ValueError) as exc:
+            # Unless another process evicted it meanwhile: that is a plain miss.
+            if os.path.isdir(path):
+                warnings.warn(f"roadmap cache entry {path} is damaged ({exc}); it is removed "
+                              "and the roadmap rebuilt", CacheWarning, stacklevel=2)
+                _discard(path)
+        else:
+            try:
+                os.utime(path)
+            except OSError:  # a read-only cache still serves, its recency unrecorded
+                pass
+            return roadmap, True
     begin = time.perf_counter()
     if refinement is not None:
         grid = refine(mechanism, grid, refinement)
@@ -81,35 +200,201 @@ def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=No
     roadmap = build_roadmap(mechanism, grid, progress=progress)
     if refinement is not None:
         roadmap.timings["refine"] = refined
-    os.makedirs(directory, exist_ok=True)
-    staging = tempfile.mkdtemp(dir=directory, suffix=".tmp")
-    _save(staging, roadmap)
     try:
-        os.rename(staging, path)
-    except OSError:  # another process stored the same entry meanwhile
-        shutil.rmtree(staging, ignore_errors=True)
+        _store(directory, key, roadmap)
+    except OSError as exc:
+        warnings.warn(f"the roadmap is not cached: cannot write the cache folder {directory} "
+                      f"({exc})", CacheWarning, stacklevel=2)
+    else:
+        _evict(directory, path, max_bytes)
     return roadmap, False
+
+
+def _checksum(data):
+    """CRC-32 of an array's bytes, or of a JSON document's canonical text."""
+    if isinstance(data, np.ndarray):
+        return zlib.crc32(data.reshape(-1).view(np.uint8))
+    return zlib.crc32(json.dumps(data, sort_keys=True, separators=(",", ":")).encode())
+
+
+def _store(directory, key, roadmap):
+    """Write an entry through a staging folder; raises OSError if it cannot."""
+    os.makedirs(directory, exist_ok=True)
+    staging = tempfile.mkdtemp(dir=directory, prefix=key + ".", suffix=".tmp")
+    try:
+        _save(staging, roadmap)
+        os.rename(staging, os.path.join(directory, key))
+    except OSError:
+        shutil.rmtree(staging, ignore_errors=True)
+        # The rename fails, harmlessly, when another process stored the entry meanwhile.
+        if not os.path.isdir(os.path.join(directory, key)):
+            raise
 
 
 def _save(folder, roadmap):
     arrays = roadmap_arrays(roadmap)
-    links = arrays.pop("links")
-    header = {"mechanism": roadmap.mechanism.to_dict(), "grid": roadmap.grid.to_dict(),
-              "arrays": sorted(arrays), "axes": len(links)}
-    arrays.update({f"links_{k}": match for k, match in enumerate(links)})
-    for name, array in arrays.items():
+    named = {name: np.ascontiguousarray(arrays[name], dtype=dtype)
+             for name, dtype in FIELD_TYPES.items()}
+    named.update({f"links_{k}": np.ascontiguousarray(match, dtype=_LINK_TYPE)
+                  for k, match in enumerate(arrays["links"])})
+    listing = {}
+    for name, array in named.items():
         np.save(os.path.join(folder, name + ".npy"), array)
+        listing[name] = {"dtype": array.dtype.str, "shape": list(array.shape),
+                         "crc32": _checksum(array)}
+    header = {"mechanism": roadmap.mechanism.to_dict(), "grid": roadmap.grid.to_dict(),
+              "arrays": listing}
+    header["checksum"] = _checksum(header)
     with open(os.path.join(folder, "header.json"), "w", encoding="utf-8") as stream:
         json.dump(header, stream)
 
 
-def _load(folder):
+def _load(folder, mechanism, grid, refinement):
+    """The roadmap of an entry (module doc); raises InvalidInputError naming
+    what failed, or OSError."""
     with open(os.path.join(folder, "header.json"), encoding="utf-8") as stream:
-        header = json.load(stream)
-
-    def read(name):
-        return np.load(os.path.join(folder, name + ".npy"), allow_pickle=False)
-
-    arrays = {name: read(name) for name in header["arrays"]}
-    arrays["links"] = [read(f"links_{k}") for k in range(header["axes"])]
+        try:
+            header = json.load(stream)
+        except ValueError as exc:
+            raise InvalidInputError(f"header.json is not JSON: {exc}") from exc
+    _check_header(header, mechanism, grid, refinement)
+    arrays = {name: _read(folder, name, spec) for name, spec in header["arrays"].items()}
+    _check_values(mechanism, arrays)
+    arrays["links"] = [arrays.pop(f"links_{k}")
+                       for k in range(len(header["arrays"]) - len(FIELD_TYPES))]
     return roadmap_from_arrays(header["mechanism"], header["grid"], arrays)
+
+
+def _check_header(header, mechanism, grid, refinement):
+    if not isinstance(header, dict) or set(header) != {"mechanism", "grid", "arrays", "checksum"}:
+        raise InvalidInputError("header.json is not an entry's header")
+    if header["checksum"] != _checksum({k: v for k, v in header.items() if k != "checksum"}):
+        raise InvalidInputError("header.json fails its checksum")
+    if _checksum(header["mechanism"]) != _checksum(mechanism.to_dict()):
+        raise InvalidInputError("header.json names another mechanism")
+    stored = header["grid"]
+    if refinement is None:
+        same = _checksum(stored) == _checksum(grid.to_dict())
+    else:
+        same = (isinstance(stored, dict) and stored.get("kind") == "adaptive"
+                and stored.get("refinement") == refinement
+                and _checksum(stored.get("base")) == _checksum(grid.to_dict()))
+    if not same:
+        raise InvalidInputError("header.json names another grid")
+    listing = header["arrays"]
+    n_links = len(listing) - len(FIELD_TYPES) if isinstance(listing, dict) else 0
+    types = dict(FIELD_TYPES, **{f"links_{k}": _LINK_TYPE for k in range(n_links)})
+    if n_links < 1 or set(listing) != set(types):
+        raise InvalidInputError("header.json lists other arrays than a roadmap's")
+    for name, spec in listing.items():
+        if (not isinstance(spec, dict) or set(spec) != {"dtype", "shape", "crc32"}
+                or spec["dtype"] != np.dtype(types[name]).str
+                or not isinstance(spec["shape"], list)
+                or not all(type(n) is int and n >= 0 for n in spec["shape"])
+                or type(spec["crc32"]) is not int):
+            raise InvalidInputError(f"header.json lists {name} wrongly")
+
+
+def _read(folder, name, spec):
+    """An array of an entry, checked against its header ``spec``."""
+    with open(os.path.join(folder, name + ".npy"), "rb") as stream:
+        version = np.lib.format.read_magic(stream)
+        readers = {(1, 0): np.lib.format.read_array_header_1_0,
+                   (2, 0): np.lib.format.read_array_header_2_0}
+        if version not in readers:
+            raise InvalidInputError(f"{name}.npy has .npy version {version}")
+        shape, fortran_order, dtype = readers[version](stream)
+        if dtype.str != spec["dtype"] or list(shape) != spec["shape"] or fortran_order:
+            raise InvalidInputError(f"{name}.npy holds {dtype.str} {shape}, the header lists "
+                                    f"{spec['dtype']} {tuple(spec['shape'])}")
+        array = np.empty(shape, dtype)
+        raw = array.reshape(-1).view(np.uint8)
+        # Sized before reading, so a wrong header never makes a huge read.
+        if os.fstat(stream.fileno()).st_size - stream.tell() != raw.size \
+                or stream.readinto(raw) != raw.size:
+            raise InvalidInputError(f"{name}.npy is not {raw.size} bytes of data")
+    if _checksum(array) != spec["crc32"]:
+        raise InvalidInputError(f"{name}.npy fails its checksum")
+    return array
+
+
+def _check_values(mechanism, arrays):
+    """The value ranges of an entry's arrays (module doc)."""
+    slots, pose_size = mechanism.max_solutions, mechanism.pose_size
+    count, poses, margin = arrays["count"], arrays["poses"], arrays["margin"]
+    region, patch = arrays["region"], arrays["patch"]
+    n = count.shape[0] if count.ndim == 1 else -1
+    shapes = {"count": (n,), "poses": (n, slots, pose_size), "margin": (n, slots),
+              "region": (n,), "patch": (n, slots)}
+    if any(arrays[name].shape != shape for name, shape in shapes.items()):
+        raise InvalidInputError("the arrays' shapes do not fit the mechanism and each other")
+    if count.max(initial=0) > slots:
+        raise InvalidInputError(f"solution counts exceed the mechanism's {slots}")
+    valid = np.arange(slots) < count[:, None]
+    if not np.array_equal(np.isfinite(margin), valid):
+        raise InvalidInputError("margins are not finite exactly where a solution exists")
+    # A NaN or an infinity in any coordinate makes the sum non-finite; summed
+    # coordinate by coordinate, five times faster than reducing the short axis.
+    if not np.array_equal(np.isfinite(sum(poses[..., k] for k in range(pose_size))), valid):
+        raise InvalidInputError("poses are not finite exactly where a solution exists")
+    if region.min(initial=0) < 0 or region[count == 0].any():
+        raise InvalidInputError("region ids are negative or on cells without solutions")
+    if patch[~valid].any():
+        raise InvalidInputError("patch ids on solutions that do not exist")
+    # A sample, spread over the cells and their slots: all of them would cost
+    # a third of a second on the full roadmap, and the checksums already
+    # cover every byte.
+    solved = np.flatnonzero(count)
+    cells = solved[np.linspace(0, solved.size - 1, min(solved.size, _MARGIN_SAMPLES),
+                               dtype=np.int64)]
+    sample = (cells, np.arange(cells.size) % count[cells])
+    if not np.allclose(mechanism.margin(poses[sample]), margin[sample], rtol=1e-6, atol=1e-9):
+        raise InvalidInputError("margins differ from the margins of their poses")
+
+
+def _discard(path):
+    """Remove an entry, renamed first so that a reader finds it whole or not at all."""
+    trash = f"{path}.{os.urandom(4).hex()}.tmp"
+    try:
+        os.rename(path, trash)
+    except OSError:  # removed meanwhile, or the cache is read-only
+        return
+    shutil.rmtree(trash, ignore_errors=True)
+
+
+def _folder_bytes(path):
+    with os.scandir(path) as items:
+        return sum(item.stat(follow_symlinks=False).st_size for item in items)
+
+
+def _evict(directory, keep, max_bytes):
+    """Remove least recently used entries but ``keep`` until the entries total
+    at most ``max_bytes``, and abandoned staging folders (module doc)."""
+    now = time.time()
+    entries, total = [], 0
+    try:
+        with os.scandir(directory) as items:
+            items = list(items)
+    except OSError:
+        return
+    for item in items:
+        try:
+            if not item.is_dir(follow_symlinks=False):
+                continue
+            if _STAGING_NAME.fullmatch(item.name):
+                if now - item.stat(follow_symlinks=False).st_mtime > STALE_STAGING_SECONDS:
+                    shutil.rmtree(item.path, ignore_errors=True)
+                continue
+            if not _ENTRY_NAME.fullmatch(item.name):
+                continue
+            used, size = item.stat(follow_symlinks=False).st_mtime, _folder_bytes(item.path)
+        except OSError:  # removed by another process meanwhile
+            continue
+        total += size
+        if item.path != keep:
+            entries.append((used, item.path, size))
+    for _, path, size in sorted(entries):
+        if total <= max_bytes:
+            break
+        _discard(path)
+        total -= size

@@ -56,8 +56,8 @@ from ..workspace import NSolutionField, Roadmap, Segmentation, aspect_groups, ro
 from ..workspace.adaptive import AdaptiveGrid, grid_from_dict
 from ..workspace.cusps import known_cusps
 
-__all__ = ["roadmap_summary", "roadmap_arrays", "roadmap_from_arrays", "roadmap_to_json",
-           "roadmap_from_json", "roadmap_to_gexf"]
+__all__ = ["FIELD_TYPES", "roadmap_summary", "roadmap_arrays", "roadmap_from_arrays",
+           "roadmap_to_json", "roadmap_from_json", "roadmap_to_gexf"]
 
 FORMAT = "rpr3-gwr-roadmap"
 VERSION = 2
@@ -120,7 +120,8 @@ def _decode(text, dtype):
         raise InvalidInputError(f"malformed field array: {exc}") from exc
 
 
-_FIELD_TYPES = {"count": "<u1", "poses": "<f8", "margin": "<f8", "region": "<i4",
+# The little-endian dtypes of the field's arrays in every stored or sent form.
+FIELD_TYPES = {"count": "<u1", "poses": "<f8", "margin": "<f8", "region": "<i4",
                 "patch": "<i4"}
 
 
@@ -168,7 +169,7 @@ def roadmap_to_json(roadmap, include_field=True):
     if include_field:
         arrays = roadmap_arrays(roadmap)
         data["field"] = {name: _encode(arrays[name], dtype)
-                         for name, dtype in _FIELD_TYPES.items()}
+                         for name, dtype in FIELD_TYPES.items()}
         data["field"]["links"] = [_encode(match, "<i1") for match in arrays["links"]]
     return json.dumps(data)
 
@@ -193,7 +194,7 @@ def roadmap_from_json(text):
         raise InvalidInputError("the document has no field: write it with include_field=True")
     try:
         raw = data["field"]
-        arrays = {name: _decode(raw[name], dtype) for name, dtype in _FIELD_TYPES.items()}
+        arrays = {name: _decode(raw[name], dtype) for name, dtype in FIELD_TYPES.items()}
         arrays["links"] = [_decode(text, "<i1") for text in raw["links"]]
         roadmap = roadmap_from_arrays(data["mechanism"], data["grid"], arrays)
         # The summary sections must describe the roadmap the arrays make.
