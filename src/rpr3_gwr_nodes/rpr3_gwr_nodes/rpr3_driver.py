@@ -44,6 +44,7 @@ from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
+from rpr3_gwr_core.mechanisms.continuation import CANNOT_FOLLOW, CROSSED, follow_path
 from rpr3_gwr_core.mechanisms.rpr3 import direct_kinematics, passive_angles, singularity_margin
 from rpr3_gwr_core.planning import DEFAULT_MAX_STEP
 from rpr3_gwr_msgs.action import ExecuteTrajectory
@@ -342,7 +343,8 @@ class Rpr3Driver(Node):
             # between: the path, not a chord, is what was validated.
             between = (times > previous) & (times < elapsed)
             rho, pose, _ = self.state()
-            followed = self._follow(pose, rho, list(positions[between]) + [target])
+            followed = self._follow(pose, rho, list(positions[between]) + [target],
+                                    abort_margin)
             at = f"at t = {elapsed:.3f} s"
             if followed is None:
                 return self._abort(goal_handle, result, _Result.SINGULARITY_ABORT,
@@ -377,22 +379,23 @@ class Rpr3Driver(Node):
         result.error_code = _Result.SUCCESS
         return self._finish(result, smallest)
 
-    def _follow(self, pose, rho, points):
-        """Follow the legs from ``rho`` through ``points`` in steps no longer
-        than the planner's validator takes; ``(pose, margin, extreme)`` with
-        the most critical margin of the whole way, or None."""
-        extreme = None
-        for point in points:
-            substeps = max(1, math.ceil(float(np.max(np.abs(point - rho))) / DEFAULT_MAX_STEP))
-            followed = self.geometry.follow(pose, rho, point, substeps=substeps)
-            if followed is None:
-                return None
-            pose, margin, step_extreme = followed
-            if (extreme is None or (step_extreme > 0) != (extreme > 0)
-                    or abs(step_extreme) < abs(extreme)):
-                extreme = step_extreme
-            rho = point
-        return pose, margin, extreme
+    def _follow(self, pose, rho, points, abort_margin):
+        """Follow the legs from ``rho`` through ``points`` as the validator
+        does (:func:`~rpr3_gwr_core.mechanisms.continuation.follow_path`, the
+        same step control, stopping below ``abort_margin``); ``(pose, margin,
+        extreme)`` with the most critical margin of the whole way (of the
+        other sign if det(Jx) changed sign), or None when the platform cannot
+        follow."""
+        followed = np.array(pose, dtype=float)
+        start = float(self.geometry.margin(followed))
+        status, _, _, smallest = follow_path(
+            self.geometry, np.array([rho, *points], dtype=float), followed, abort_margin,
+            DEFAULT_MAX_STEP)
+        if status == CANNOT_FOLLOW:
+            return None
+        extreme = math.copysign(smallest, start) if status != CROSSED \
+            else -math.copysign(abort_margin, start)
+        return tuple(followed), float(self.geometry.margin(followed)), extreme
 
     def _abort(self, goal_handle, result, code, reason, smallest):
         self.get_logger().warning(f"aborting the trajectory and holding still: {reason}")

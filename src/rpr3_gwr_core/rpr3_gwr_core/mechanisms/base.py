@@ -18,19 +18,12 @@ runs outside the interpreter.
 import abc
 import math
 
-from numba import types
 import numpy as np
 
 from ..exceptions import InvalidInputError
+from .continuation import STEP_KERNEL_SIGNATURE
 
 __all__ = ["Mechanism", "mechanism_from_dict", "register_mechanism", "STEP_KERNEL_SIGNATURE"]
-
-# ``margin = kernel(parameters, pose, joints_from, joints_to)``: one
-# predictor-corrector step that overwrites ``pose`` (its coordinates at
-# ``joints_from``) with the pose at ``joints_to`` and returns its margin, or
-# returns NaN, leaving ``pose`` as it was, when the corrector does not converge.
-STEP_KERNEL_SIGNATURE = types.float64(types.float64[::1], types.float64[::1],
-                                      types.float64[::1], types.float64[::1])
 
 _REGISTRY = {}
 
@@ -213,40 +206,6 @@ class Mechanism(abc.ABC):
     def pose_distance(self, a, b):
         """Euclidean norm of :meth:`pose_difference` [length unit], shape (...)."""
         return np.linalg.norm(self.pose_difference(a, b), axis=-1)
-
-    def follow(self, pose, joints_from, joints_to, substeps=1, max_halvings=8):
-        """Carry a pose from ``joints_from`` to ``joints_to`` in ``substeps``
-        equal steps, halving a step where the corrector fails.
-
-        Returns
-        -------
-        (tuple of float, float, float) or None
-            The final pose and its margin, and the margin of smallest
-            magnitude met on the way, or of the other sign if the margin
-            changed sign (so ``sign(extreme) != sign(margin at the start)``
-            tells a crossed singularity); None when the platform cannot
-            follow.
-        """
-        pose = tuple(float(v) for v in pose)
-        joints_from = np.asarray(joints_from, dtype=float)
-        joints_to = np.asarray(joints_to, dtype=float)
-        done, h = 0.0, 1.0 / substeps
-        smallest = h / 2**max_halvings
-        margin = extreme = float(self.margin(np.array(pose)))
-        while done < 1.0:
-            h = min(h, 1.0 - done)
-            out = self.step(pose, joints_from + (joints_to - joints_from) * done,
-                            joints_from + (joints_to - joints_from) * (done + h))
-            if out is None:
-                if h < smallest:
-                    return None
-                h /= 2
-                continue
-            pose, margin = out
-            if (margin > 0) != (extreme > 0) or abs(margin) < abs(extreme):
-                extreme = margin
-            done += h
-        return pose, margin, extreme
 
     def wrap_scalar(self, pose):
         """One pose (sequence of floats) with its angles wrapped, as a tuple."""

@@ -518,9 +518,13 @@ def _predict(pose, rho_from, rho_to, geometry):
 
 
 # The scalar continuation step: converged when every leg's residual is below
-# _RESIDUAL_TOL * scale**2, after at most _NEWTON_STEPS corrector steps.
+# _RESIDUAL_TOL * scale**2, after at most _NEWTON_STEPS corrector steps, and
+# refused when the corrector moved the pose more than _JUMP_RATIO times the
+# predictor's move plus _JUMP_FLOOR * scale (the residual tolerance's reach).
 _NEWTON_STEPS = 6
 _RESIDUAL_TOL = 1e-9
+_JUMP_RATIO = 0.5
+_JUMP_FLOOR = 1e-7
 
 
 def _step(geometry, pose, rho_from, rho_to):
@@ -558,12 +562,20 @@ def _compiled_step(parameters, scale, x, y, alpha, r1, r2, r3, t1, t2, t3):
     (dx, dy, da), det = _adjugate_product(rows, r1 * (t1 - r1), r2 * (t2 - r2), r3 * (t3 - r3))
     if det == 0.0:
         return False, x, y, alpha, 0.0
-    x, y, alpha = x + dx / det, y + dy / det, alpha + da / det
+    px, py, palpha = x + dx / det, y + dy / det, alpha + da / det
+    predicted = math.sqrt((dx / det) ** 2 + (dy / det) ** 2 + (da / det * scale) ** 2)
+    x, y, alpha = px, py, palpha
     tol = _RESIDUAL_TOL * scale * scale
     for _ in range(_NEWTON_STEPS):
         rows = _row_terms(x, y, alpha, parameters)
         e1, e2, e3 = _leg_residuals(rows, (t1, t2, t3))
         if max(abs(e1), abs(e2), abs(e3)) < tol:
+            corrected = math.sqrt((x - px) ** 2 + (y - py) ** 2 + ((alpha - palpha) * scale) ** 2)
+            # The predictor is first order, so on the followed branch the
+            # correction is of second order in the step: one as long as the
+            # prediction itself landed on another solution of these legs.
+            if corrected > _JUMP_RATIO * predicted + _JUMP_FLOOR * scale:
+                return False, x, y, alpha, 0.0
             return True, x, y, alpha, _rows_margin(rows, scale)
         (dx, dy, da), det = _adjugate_product(rows, e1, e2, e3)
         if det == 0.0:

@@ -40,6 +40,8 @@ _RESTORED_SHORTCUTS = 6
 # The paper's clearance weight (1 + w / d per cell), for paths that keep to
 # the middle of their patches when the shortest ones cannot be repaired.
 _DETOUR_WEIGHT = 10.0
+# A followed pose this far from its waypoint's solution [scale] is on another sheet.
+_STRAYED = 1e-4
 # Global paths tried, the listed ones included, before a plan fails: when
 # every shortest path fails locally, longer ones may still pass.
 _MAX_GLOBAL_ATTEMPTS = 16
@@ -339,7 +341,7 @@ class Planner:
             result, kept = self._shortcut_validated(joints, patches, s, g, clearance, keep)
             if result.ok:
                 return result, joints[kept], patches[kept]
-            k = result.failed_segment
+            k = self._failed_segment(result, joints[kept], patches[kept])
             if k < 1:
                 break
             a, b = kept[k - 1], kept[k]
@@ -367,7 +369,7 @@ class Planner:
             kept = self._shortcut(joints, patches, margins, clearance)
         for attempt in range(_RESTORED_SHORTCUTS + 2):
             result = self._validate(joints[kept], s, g, keep)
-            k = result.failed_segment
+            k = self._failed_segment(result, joints[kept], patches[kept])
             if result.ok or k < 1 or kept[k] - kept[k - 1] == 1:
                 break
             a, b = kept[k - 1], kept[k] + 1
@@ -377,6 +379,28 @@ class Planner:
                 restored = _turns(joints)
             kept = np.union1d(kept, restored)
         return result, kept
+
+    def _failed_segment(self, result, joints, patches):
+        """Index k of the segment from waypoint k - 1 to k where a refused path
+        failed.  For a path that ends in another assembly mode, it is the
+        segment after the last waypoint where the followed pose is still its
+        patch's solution at the waypoint's cell (the platform strayed onto
+        another sheet after it)."""
+        if result.ok or result.failed_segment >= 1:
+            return result.failed_segment
+        cells = self.roadmap.grid.cells_of(joints[:, self._free])
+        seg = self.roadmap.segmentation
+        member = seg.patch[cells] == patches[:, None]
+        sheet = seg.field.poses[cells, np.argmax(member, axis=1)]
+        mechanism = self.roadmap.mechanism
+        verifiable = np.all(np.abs(joints - self._joints[cells]) < 1e-9, axis=1) \
+            & member.any(axis=1)
+        off = verifiable & (mechanism.pose_distance(result.poses, sheet)
+                            > _STRAYED * mechanism.scale)
+        off[0] = False
+        first_off = int(np.argmax(off)) if off.any() else len(joints) - 1
+        on = np.flatnonzero(verifiable[:first_off] & ~off[:first_off])
+        return 1 + int(on.max(initial=0))
 
     def _kept_margin(self, s, g, clearance):
         return max(self.min_margin, min(0.25 * clearance, abs(s.margin), abs(g.margin)))

@@ -1,33 +1,26 @@
 """The independent trajectory validator.
 
 It knows nothing of grids, regions or patches: it drives the joints along
-the path in steps of at most ``max_step`` and follows the platform like the
-real mechanism would, by continuation (Euler predictor, Newton corrector) of
-the constraint equations from the start pose.  It fails a path when
+the path and follows the platform like the real mechanism would, by
+continuation of the constraint equations from the start pose
+(:func:`~rpr3_gwr_core.mechanisms.continuation.follow_path`, whose step
+control keeps every step on the followed solution branch and samples the
+margin densely enough near a singularity that no dip goes unseen).  It fails
+a path when
 
-* the corrector does not converge even in steps 256 times smaller (the
-  platform would have to jump),
+* the platform cannot follow the joints (it would have to jump to another
+  solution: the followed branch ends in a fold),
 * the sign of the margin changes (a parallel singularity was crossed),
 * the margin's magnitude (:meth:`~rpr3_gwr_core.mechanisms.Mechanism.margin`)
   falls below ``min_margin``, or
 * the platform does not arrive at the goal pose (another assembly mode).
-
-The steps are sequential and small, so they use the mechanism's scalar
-:meth:`~rpr3_gwr_core.mechanisms.Mechanism.step`, and the whole loop runs
-compiled when the mechanism has that step compiled
-(:attr:`~rpr3_gwr_core.mechanisms.Mechanism.step_kernel`).
 """
 
 from dataclasses import dataclass
-import math
-
 import numpy as np
 
-import numba
-from numba import types
-
 from ..exceptions import InvalidInputError
-from ..mechanisms.base import STEP_KERNEL_SIGNATURE
+from ..mechanisms.continuation import CANNOT_FOLLOW, CROSSED, TOO_CLOSE, follow_path
 
 __all__ = ["Validation", "validate_path", "DEFAULT_MAX_STEP", "DEFAULT_MIN_MARGIN"]
 
@@ -36,9 +29,10 @@ DEFAULT_MAX_STEP = 0.0625
 # configuration counts as singular: the platform's orientation then moves
 # more than about a thousand times faster than at a well-conditioned pose.
 DEFAULT_MIN_MARGIN = 1e-3
-_MAX_HALVINGS = 8
-_FINE_MARGIN = 0.05
 _GOAL_TOL = 1e-6
+# A start pose with a larger residual [scale**2] is corrected before following.
+_CONVERGED = 1e-10
+_POLISH_ITERATIONS = 3
 
 
 @dataclass(frozen=True)
@@ -81,9 +75,8 @@ def validate_path(mechanism, path, start_pose, goal_pose=None,
                   min_margin=DEFAULT_MIN_MARGIN, max_step=DEFAULT_MAX_STEP):
     """Follow the platform along a joint path and check it stays regular.
 
-    Steps are at most ``max_step``, shrunk in proportion to the margin below
-    0.05; where the corrector does not converge the step is halved, up to
-    ``2**-8`` of it, before the path fails.
+    Steps are at most ``max_step`` and shrink near singularities (see
+    :mod:`~rpr3_gwr_core.mechanisms.continuation`).
 
     Parameters
     ----------
@@ -129,20 +122,19 @@ def validate_path(mechanism, path, start_pose, goal_pose=None,
     sign = 1 if margin > 0 else -1
     if abs(margin) < min_margin:
         return result(False, f"start is singular (margin {abs(margin):.2e})", abs(margin), sign)
-    follow, (kernel, parameters) = _follow, mechanism.step_kernel or (None, None)
-    if kernel is None:
-        follow, kernel, parameters = _follow.py_func, _interpreted_kernel(mechanism), np.empty(0)
+    # Converged first, so that what the corrector moves later is the path's doing.
     followed = pose.copy()
-    status, k, steps, smallest = follow(
-        kernel, parameters, path, followed, margin > 0, abs(margin),
-        np.array(mechanism.angular, dtype=np.bool_), max_step, min_margin, poses)
-    if status == _CANNOT_FOLLOW:
+    if residual > _CONVERGED * mechanism.scale**2:
+        followed = np.array(mechanism.correct(pose, path[0], _POLISH_ITERATIONS), dtype=float)
+    status, k, steps, smallest = follow_path(mechanism, path, followed, min_margin, max_step,
+                                             poses)
+    if status == CANNOT_FOLLOW:
         return result(False, f"platform cannot follow the joints before waypoint {k}",
                       smallest, sign, steps, k)
-    if status == _CROSSED:
+    if status == CROSSED:
         return result(False, f"the margin changes sign before waypoint {k}: "
                       "a parallel singularity is crossed", 0.0, sign, steps, k)
-    if status == _TOO_CLOSE:
+    if status == TOO_CLOSE:
         return result(False, f"margin {smallest:.2e} below {min_margin:g} before "
                       f"waypoint {k}", smallest, sign, steps, k)
     pose = followed
@@ -152,63 +144,3 @@ def validate_path(mechanism, path, start_pose, goal_pose=None,
             return result(False, f"platform ends {miss:.3g} away from the goal pose: "
                           "another assembly mode", smallest, sign, steps)
     return result(True, "ok", smallest, sign, steps)
-
-
-def _interpreted_kernel(mechanism):
-    """:meth:`Mechanism.step` with the step kernel's calling convention."""
-    def kernel(parameters, pose, joints_from, joints_to):
-        stepped = mechanism.step(pose, joints_from, joints_to)
-        if stepped is None:
-            return math.nan
-        pose[:] = stepped[0]
-        return stepped[1]
-    return kernel
-
-
-_FOLLOWING, _CANNOT_FOLLOW, _CROSSED, _TOO_CLOSE = range(4)
-
-
-@numba.njit(types.Tuple((types.int64, types.int64, types.int64, types.float64))(
-    types.FunctionType(STEP_KERNEL_SIGNATURE), types.float64[::1], types.float64[:, ::1],
-    types.float64[::1], types.boolean, types.float64, types.boolean[::1], types.float64,
-    types.float64, types.float64[:, ::1]), cache=True, nogil=True)
-def _follow(step, parameters, path, pose, sign, smallest, angular, max_step, min_margin, poses):
-    """Follow ``pose`` (in place) along ``path`` from its start, where the
-    margin is ``smallest`` and positive if ``sign``, writing the pose reached
-    at each waypoint to ``poses``: ``(status, waypoint, steps, smallest
-    margin)``, the waypoint where it stopped unless the status is
-    ``_FOLLOWING``."""
-    poses[0] = pose
-    trial = np.empty_like(pose)
-    steps = 0
-    for k in range(1, path.shape[0]):
-        start, end = path[k - 1], path[k]
-        full = max(1.0, np.max(np.abs(end - start)) / max_step)
-        done, h = 0.0, min(1.0, smallest / _FINE_MARGIN) / full
-        while done < 1.0:
-            h = min(h, 1.0 - done)
-            trial[:] = pose
-            margin = step(parameters, trial, start + (end - start) * done,
-                          start + (end - start) * (done + h))
-            if np.isnan(margin):
-                # Near a singularity the platform moves fast: refine before giving up.
-                if h * full < 2.0**-_MAX_HALVINGS:
-                    return _CANNOT_FOLLOW, k, steps, smallest
-                h /= 2
-                continue
-            pose[:] = trial
-            done += h
-            # Sample finer where the margin is small, so that no dip between
-            # two steps goes unseen.
-            h = min(2 * h, min(1.0, abs(margin) / _FINE_MARGIN) / full)
-            steps += 1
-            if (margin > 0) != sign:
-                return _CROSSED, k, steps, 0.0
-            smallest = min(smallest, abs(margin))
-            if smallest < min_margin:
-                return _TOO_CLOSE, k, steps, smallest
-        poses[k] = pose
-        for j in range(pose.size):
-            if angular[j]:
-                poses[k, j] = math.atan2(math.sin(pose[j]), math.cos(pose[j]))
-    return _FOLLOWING, -1, steps, smallest
