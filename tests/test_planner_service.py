@@ -79,6 +79,11 @@ class PlannerUnderTest:
         return self.call(PlanPath.Request(start=_configuration(start), goal=_configuration(goal),
                                           **options))
 
+    def default_limits(self):
+        """The limits that time requests without their own."""
+        return tuple(self.planner.get_parameter(name).value
+                     for name in ("default_max_velocity", "default_max_acceleration"))
+
     def close(self):
         self.executor.shutdown(timeout_sec=10.0)
         self.thread.join(timeout=10.0)
@@ -99,8 +104,10 @@ def _seconds(point):
     return point.time_from_start.sec + point.time_from_start.nanosec * 1e-9
 
 
-def check_sound(request, response, stamp):
-    """The contract of every answer (the fuzz test's assertions)."""
+def check_sound(request, response, stamp, default_limits):
+    """The contract of every answer (the fuzz test's assertions); requests
+    without limits are timed with ``default_limits``, the planner's
+    ``default_max_velocity`` and ``default_max_acceleration``."""
     assert response.error_code in CODES, response.error_code
     if response.error_code != PlanPath.Response.ERROR_NO_ROADMAP:
         assert response.roadmap_stamp == stamp.stamp and response.roadmap_rho1 == 17.0
@@ -125,6 +132,18 @@ def check_sound(request, response, stamp):
                                rtol=0, atol=1e-9)
     np.testing.assert_allclose(points[-1].positions, [goal.rho1, goal.rho2, goal.rho3],
                                rtol=0, atol=1e-9)
+    # The limits hold between the points, for a driver moving each joint
+    # linearly from point to point: the joint change over each interval, and
+    # the change of the point velocities over it.
+    max_velocity, max_acceleration = default_limits
+    if request.max_velocity > 0:
+        max_velocity, max_acceleration = request.max_velocity, request.max_acceleration
+    interval = np.diff(nanoseconds)[:, None] * 1e-9
+    rounding = 1 + 1e-9
+    assert np.all(np.abs(np.diff(numbers[:, :3], axis=0)) / interval
+                  <= max_velocity * rounding)
+    assert np.all(np.abs(np.diff(numbers[:, 3:6], axis=0)) / interval
+                  <= max_acceleration * rounding)
 
 
 # --- one test per defect the issue reported -----------------------------------------------------
@@ -255,7 +274,7 @@ outcomes = collections.Counter()
 def test_fuzzed_requests_get_sound_answers(service, request):
     response = service.call(request)
     outcomes[CODES[response.error_code]] += 1
-    check_sound(request, response, service.stamp)
+    check_sound(request, response, service.stamp, service.default_limits())
 
 
 def test_the_node_answers_a_good_request_after_the_fuzzing(service):
@@ -265,7 +284,7 @@ def test_the_node_answers_a_good_request_after_the_fuzzing(service):
     response = service.plan(Q1, Q2, smooth=True)
     assert response.success, response.error_msg
     check_sound(PlanPath.Request(start=_configuration(Q1), goal=_configuration(Q2)), response,
-                service.stamp)
+                service.stamp, service.default_limits())
 
 
 def test_the_clearance_parameter_sets_the_margin_paths_keep(service):

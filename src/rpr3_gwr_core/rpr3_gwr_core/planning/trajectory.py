@@ -9,8 +9,17 @@ Timing is a velocity profile along the path's arc length s: the speed
 at each corner so that the change of joint velocity across it stays within
 half of ``max_acceleration``; forward and backward passes then bound the
 acceleration along the path, ``v dv/ds``, by the other half, starting and
-ending at rest.  Where the finite-difference joint acceleration at a waypoint
-still exceeds the limit, the speed there is lowered and the profile redone.
+ending at rest.  A segment takes its length over the mean of its end speeds,
+and never less than its length at the speed cap (a segment between two rests
+would otherwise be timed by the acceleration alone).  Durations are rounded
+up to whole nanoseconds, the resolution of a ROS ``Duration``, so that a
+consumer's rounding cannot speed a segment up.  Where a joint's velocity
+changes between two waypoints faster than the acceleration limit, the speed
+there is lowered and the profile redone.  The limits therefore hold between
+the points, for a consumer that moves each joint linearly from point to
+point: every segment's joint change over its duration is within
+``max_velocity``, and the change of the point velocities over it within
+``max_acceleration``.
 """
 
 import math
@@ -84,16 +93,17 @@ def time_parameterize(path, max_velocity, max_acceleration):
         they integrate back to the path and never exceed ``max_velocity``.
     accelerations : ndarray, shape (n, n_joints)
         Joint accelerations at the waypoints [joint unit / s**2]: central
-        differences of the velocities (one-sided at the ends).  Where one
-        would exceed ``max_acceleration`` the speed there is lowered and the
-        profile recomputed, so all of them respect it.
+        differences of the velocities (one-sided at the ends).  Where the
+        velocities change faster than ``max_acceleration`` between two
+        waypoints, the speed there is lowered and the profile recomputed, so
+        these and the accelerations between the points respect it.
 
     Raises
     ------
     InvalidInputError
         If a limit is not positive and finite, or the limits are so far from
-        the path's scale that the times or derivatives are not finite or the
-        times do not increase strictly.
+        the path's scale that the times or derivatives are not finite, or
+        two waypoints would be at most a nanosecond apart.
     """
     if not (math.isfinite(max_velocity) and max_velocity > 0
             and math.isfinite(max_acceleration) and max_acceleration > 0):
@@ -107,10 +117,11 @@ def time_parameterize(path, max_velocity, max_acceleration):
     if np.any(length == 0):
         raise InvalidInputError("consecutive waypoints must differ")
     direction = delta / length[:, None]
+    # Fastest speed along each segment that keeps every joint within the limit.
+    segment_cap = max_velocity / np.max(np.abs(direction), axis=1)
     cap = np.full(n, np.inf)
-    for k in range(n - 1):
-        seg_cap = max_velocity / np.max(np.abs(direction[k]))
-        cap[k], cap[k + 1] = min(cap[k], seg_cap), min(cap[k + 1], seg_cap)
+    cap[:-1] = segment_cap
+    cap[1:] = np.minimum(cap[1:], segment_cap)
     turn = np.max(np.abs(direction[1:] - direction[:-1]), axis=1)
     span = 0.5 * (length[1:] + length[:-1])
     half = 0.5 * max_acceleration
@@ -121,10 +132,13 @@ def time_parameterize(path, max_velocity, max_acceleration):
         cap[0] = cap[-1] = 0.0
         for _ in range(_MAX_REFINEMENTS):
             speed = _speed_profile(cap, length, half)
-            times = _times(speed, length, half)
+            times = _times(speed, length, segment_cap, half)
             velocities = _velocities(path, times)
             accelerations = _differences(velocities, times)
-            excess = np.max(np.abs(accelerations), axis=1) / max_acceleration
+            # The fastest change of any joint velocity on either side of a waypoint.
+            change = np.max(np.abs(np.diff(velocities, axis=0)), axis=1) / np.diff(times)
+            excess = np.maximum(np.concatenate([[0.0], change]),
+                                np.concatenate([change, [0.0]])) / max_acceleration
             if np.all(excess <= 1.0):
                 break
             # Lower the speed around each offending waypoint and try again.
@@ -132,10 +146,15 @@ def time_parameterize(path, max_velocity, max_acceleration):
             for k in (over - 1, over, over + 1):
                 k = k[(k >= 0) & (k < n)]
                 cap[k] = np.minimum(cap[k], speed[k] / np.sqrt(np.maximum(excess[k], 1.0)) * 0.9)
+    if np.all(np.isfinite(times)) and np.any(np.diff(np.round(times * _NANOSECONDS)) < 2):
+        raise InvalidInputError(
+            f"max_velocity = {max_velocity:g} and max_acceleration = {max_acceleration:g} are so "
+            "high that two waypoints are at most 1 ns apart: lower them")
     # Limits far from the path's scale (1e-300, 1e300) overflow or underflow
     # the profile: such a request cannot be timed, and must not look timed.
     if not (np.all(np.isfinite(times)) and np.all(np.diff(times) > 0)
-            and np.all(np.isfinite(velocities)) and np.all(np.isfinite(accelerations))):
+            and np.all(np.isfinite(velocities)) and np.all(np.isfinite(accelerations))
+            and np.all(excess <= 1.0)):
         raise InvalidInputError(
             f"max_velocity = {max_velocity:g} and max_acceleration = {max_acceleration:g} cannot "
             f"time this path in floating point (duration {times[-1]:g} s)")
@@ -143,6 +162,7 @@ def time_parameterize(path, max_velocity, max_acceleration):
 
 
 _MAX_REFINEMENTS = 60
+_NANOSECONDS = 1e9
 
 
 def _speed_profile(cap, length, acceleration):
@@ -155,12 +175,15 @@ def _speed_profile(cap, length, acceleration):
     return speed
 
 
-def _times(speed, length, acceleration):
-    mean = 0.5 * (speed[:-1] + speed[1:])
-    # A segment between two rests takes the bang-bang time.
+def _times(speed, length, segment_cap, acceleration):
+    """Time stamps [s], whole nanoseconds: each segment at the mean of its end
+    speeds, at most its cap; between two rests, the bang-bang time or the
+    cap's, whichever is longer."""
+    mean = np.minimum(0.5 * (speed[:-1] + speed[1:]), segment_cap)
     duration = np.where(mean > 0, length / np.where(mean > 0, mean, 1.0),
-                        2.0 * np.sqrt(length / acceleration))
-    return np.concatenate([[0.0], np.cumsum(duration)])
+                        np.maximum(2.0 * np.sqrt(length / acceleration), length / segment_cap))
+    nanoseconds = np.ceil(duration * _NANOSECONDS)
+    return np.concatenate([[0.0], np.cumsum(nanoseconds)]) / _NANOSECONDS
 
 
 def _velocities(positions, times):

@@ -1,0 +1,57 @@
+"""The limits of a timed path hold between its points, not only at them."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+from hypothesis.extra.numpy import arrays
+
+from rpr3_gwr_core.exceptions import InvalidInputError
+from rpr3_gwr_core.planning.trajectory import time_parameterize
+
+ROUNDING = 1 + 1e-9
+
+
+def assert_limits_hold(path, times, velocities, accelerations, max_velocity, max_acceleration):
+    """For a consumer moving each joint linearly between points: the joint
+    change over each interval, and the change of the point velocities over
+    it, stay within the limits, and so do the reported derivatives."""
+    interval = np.diff(times)[:, None]
+    assert np.all(interval > 0)
+    assert np.all(np.abs(np.diff(path, axis=0)) / interval <= max_velocity * ROUNDING)
+    assert np.all(np.abs(np.diff(velocities, axis=0)) / interval <= max_acceleration * ROUNDING)
+    assert np.all(np.abs(velocities) <= max_velocity * ROUNDING)
+    assert np.all(np.abs(accelerations) <= max_acceleration * ROUNDING)
+    # Whole nanoseconds, as a ROS Duration holds them.
+    np.testing.assert_array_equal(np.round(times * 1e9) / 1e9, times)
+
+
+@pytest.mark.parametrize("max_velocity, max_acceleration", [(1.0, 2.0), (0.5, 1e12),
+                                                            (1e6, 1e308), (2.0, 1e-3)])
+def test_a_move_between_two_rests_keeps_the_speed_limit(max_velocity, max_acceleration):
+    """A two-point path was timed by its acceleration alone: 14.5 length
+    units in 8.38 s against a limit of 1 /s."""
+    path = np.array([[17.0, 18.875, 32.25], [17.0, 33.375, 42.125]])
+    timing = time_parameterize(path, max_velocity, max_acceleration)
+    assert_limits_hold(path, *timing, max_velocity, max_acceleration)
+
+
+def test_a_path_too_fast_for_nanoseconds_is_refused():
+    path = np.array([[17.0, 18.0, 32.0], [17.0, 18.1, 32.0], [17.0, 18.2, 32.1]])
+    with pytest.raises(InvalidInputError, match="1 ns"):
+        time_parameterize(path, 1e12, 1e30)
+
+
+steps = arrays(np.float64, st.tuples(st.integers(1, 30), st.just(3)),
+               elements=st.floats(-2.0, 2.0).filter(lambda v: abs(v) > 1e-3))
+
+
+@settings(max_examples=300, deadline=None)
+@given(steps=steps, max_velocity=st.floats(1e-2, 1e3), max_acceleration=st.floats(1e-2, 1e4))
+def test_limits_hold_between_the_points_of_any_path(steps, max_velocity, max_acceleration):
+    path = np.vstack([[17.0, 20.0, 20.0], 17.0 + np.cumsum(steps, axis=0)])
+    try:
+        timing = time_parameterize(path, max_velocity, max_acceleration)
+    except InvalidInputError as error:
+        assert "1 ns" in str(error)
+        return
+    assert_limits_hold(path, *timing, max_velocity, max_acceleration)
