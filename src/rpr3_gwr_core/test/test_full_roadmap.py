@@ -53,6 +53,14 @@ def test_the_full_roadmap_is_adaptive_over_the_three_legs(full_roadmap):
     assert grid.size < 0.25 * 197 * 201 * 201
 
 
+def test_every_stored_solution_has_its_cells_legs(full_roadmap):
+    field = full_roadmap.segmentation.field
+    cells, slots = np.nonzero(np.arange(field.poses.shape[1]) < field.count[:, None])
+    joints = full_roadmap.grid.joints()[cells]
+    residual = PAPER_GEOMETRY.residual(field.poses[cells, slots], joints)
+    assert np.abs(residual).max() <= 1e-6 * PAPER_GEOMETRY.scale**2
+
+
 def test_the_configuration_space_has_two_aspect_connected_components(full_roadmap, planner):
     seg = full_roadmap.segmentation
     groups = aspect_groups(full_roadmap.graph)

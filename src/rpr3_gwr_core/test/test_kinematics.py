@@ -120,6 +120,28 @@ def test_every_direct_solution_has_the_given_legs(x, y, alpha):
                                rtol=1e-6, atol=1e-6)
 
 
+@pytest.mark.parametrize("rho", [(48.0, 46.0, 19.0), (16.25, 48.0, 43.0)])
+def test_a_degenerate_double_root_without_a_real_pose_is_no_solution(rho):
+    """The sextic has a double root at a degenerate orientation whose line of
+    B1 misses leg 1's circle: no pose has these legs and that orientation."""
+    poses = direct_kinematics(np.array(rho))
+    assert len(poses) == 2
+    np.testing.assert_allclose(inverse_kinematics(poses), np.broadcast_to(rho, poses.shape),
+                               rtol=0, atol=1e-9)
+
+
+legs = st.floats(0.5, 50.0)
+
+
+@settings(max_examples=300, deadline=None)
+@given(legs, legs, legs)
+def test_every_solution_of_any_legs_has_those_legs(r1, r2, r3):
+    rho = np.array([r1, r2, r3])
+    poses = direct_kinematics(rho)
+    residual = constraint_residual(poses, np.broadcast_to(rho, poses.shape))
+    assert np.all(np.abs(residual) <= 1e-6 * PAPER_GEOMETRY.scale**2)
+
+
 def test_solution_near_a_degenerate_orientation_is_accurate():
     rho = inverse_kinematics(np.array([0.0, -1.0, 0.0]))
     poses = direct_kinematics(rho)

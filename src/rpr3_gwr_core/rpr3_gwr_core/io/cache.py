@@ -72,7 +72,7 @@ __all__ = ["CacheWarning", "DEFAULT_MAX_BYTES", "STALE_STAGING_SECONDS", "defaul
            "default_max_bytes", "cache_key", "cached_roadmap"]
 
 # Bump when a change of the algorithms changes roadmaps, so old entries are not reused.
-ALGORITHM_REVISION = 4
+ALGORITHM_REVISION = 5
 # Bump when the files of an entry change, so old entries are misses (evicted in
 # their turn) rather than damaged entries.
 ENTRY_LAYOUT = 2

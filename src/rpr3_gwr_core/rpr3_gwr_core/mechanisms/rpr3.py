@@ -259,6 +259,8 @@ _IMAG_TOL = 1e-6
 # Between it and _POLISH_TOL the linear formula is polished by Newton.
 _DEGENERATE_TOL = 1e-3
 _POLISH_TOL = 1e-2
+# A root whose pose misses the legs by this much [scale**2] is not a solution.
+_FAKE_RESIDUAL = 1e-3
 # Two roots closer than this are the halves of one double root [rad].
 _PAIR_GAP = 1e-3
 _SAMPLES = 64
@@ -863,7 +865,18 @@ def _solve(rho, geometry):
         moved = np.max(np.abs(after - before), axis=-1)
         keep = (fit(after) < fit(before)) & ((moved < 1e-3 * geometry.scale) | ~regular[rough])
         candidate[np.flatnonzero(rough)[keep]] = after[keep]
+    # A double root of the sextic at a degenerate orientation whose line of
+    # B1 misses leg 1's circle is no pose at all (its B1 is complex): the
+    # candidate built for it misses the legs by far more than rounding.
+    fake = np.max(np.abs(_residuals(candidate, r, geometry)), axis=-1) \
+        > _FAKE_RESIDUAL * geometry.scale**2
     poses[rows, cols] = candidate
+    poses[rows[fake], cols[fake]] = np.nan
+    if np.any(fake):
+        alpha[rows[fake], cols[fake]] = np.nan
+        first = np.argsort(np.isnan(alpha), axis=1, kind="stable")
+        poses = np.take_along_axis(poses, first[..., None], axis=1)
+        alpha = np.take_along_axis(alpha, first, axis=1)
     poses[..., 2] = wrap_angle(poses[..., 2])
     return np.isfinite(alpha).sum(axis=1).astype(np.uint8), poses
 
