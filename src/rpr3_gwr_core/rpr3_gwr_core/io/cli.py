@@ -18,8 +18,11 @@ Subcommands::
     rpr3-gwr cusps --trace RHO1_MIN RHO1_MAX RHO1_STEP [--step 0.25]
 
 Results go to stdout as JSON; bad arguments exit with code 2 and one line on
-stderr; a plan that cannot be made prints an ``error`` object with a code and
-a message and exits with 1; progress is shown on stderr when it is a terminal.
+stderr (legs longer than 1e6 length units, a grid over
+:data:`~rpr3_gwr_core.workspace.grid.MAX_GRID_CELLS` cells or one that cannot
+give a roadmap, a file that cannot be read or written); a plan that cannot be
+made prints an ``error`` object with a code and a message and exits with 1;
+progress is shown on stderr when it is a terminal.
 ``plan`` and ``plot`` keep built roadmaps in the cache of
 :mod:`~rpr3_gwr_core.cache` (``--cache-dir``).  ``--full`` takes the full
 3-DOF roadmap, all three legs free (:data:`~rpr3_gwr_core.paper.FULL_BASE_GRID`
@@ -42,9 +45,16 @@ from ..paper import FULL_BASE_GRID, FULL_REFINEMENT, PAPER_GEOMETRY, rho1_slice
 from ..planning import PlanOptions, Planner
 from ..workspace import Grid, build_roadmap
 from ..workspace.cusps import cusp_curves, find_cusps
+from ..workspace.grid import check_roadmap_grid
 from .cache import cached_roadmap, default_cache_dir
 
 __all__ = ["main"]
+
+# Longest leg the tool takes [length unit].  The direct kinematics weighs the
+# squared legs against the geometry's tens of units, so the leg residual of
+# its solutions grows with them (3e-7 at 1e6, 4e-3 at 1e10) until its
+# polynomial overflows near 1e77.
+_MAX_LEG = 1e6
 
 
 class _Parser(argparse.ArgumentParser):
@@ -62,32 +72,55 @@ def _finite(text):
     return value
 
 
+def _leg(text):
+    value = _finite(text)
+    if value > _MAX_LEG:
+        raise argparse.ArgumentTypeError(f"{text!r} is out of range: legs are at most "
+                                         f"{_MAX_LEG:g} length units")
+    return value
+
+
+def _figure(path):
+    """A figure file whose extension, if any, names a format matplotlib writes
+    (checked before anything is built)."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    formats = FigureCanvasBase.get_supported_filetypes()
+    extension = os.path.splitext(path)[1][1:].lower()
+    if extension and extension not in formats:
+        raise argparse.ArgumentTypeError(f"{path}: unknown figure format {extension!r} "
+                                         f"(known: {', '.join(sorted(formats))})")
+    return path
+
+
 def _parser():
     parser = _Parser(prog="rpr3-gwr", description="Global workspace roadmap of the 3-RPR.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     dk = sub.add_parser("dk", help="all direct-kinematic solutions of (rho1, rho2, rho3)")
     for name in ("rho1", "rho2", "rho3"):
-        dk.add_argument(name, type=_finite)
+        dk.add_argument(name, type=_leg)
     roadmap = sub.add_parser("roadmap", help="build the roadmap and print a JSON summary")
-    roadmap.add_argument("--rho1", type=_finite, default=17.0)
+    roadmap.add_argument("--rho1", type=_leg, default=17.0)
     for leg in ("--rho2", "--rho3"):
-        roadmap.add_argument(leg, type=_finite, nargs=2, default=(0.0, 50.0),
+        roadmap.add_argument(leg, type=_leg, nargs=2, default=(0.0, 50.0),
                              metavar=("MIN", "MAX"))
     roadmap.add_argument("--step", type=_finite, default=0.125)
     roadmap.add_argument("--method", choices=("components", "rds"), default="components")
     roadmap.add_argument("-o", "--output", help="write the full roadmap JSON (with field) here")
     roadmap.add_argument("--gexf", help="write the roadmap graph as GEXF here")
-    roadmap.add_argument("--field-figure",
+    roadmap.add_argument("--field-figure", type=_figure,
                          help="write the n-solution field figure here (PNG, PDF, SVG)")
-    roadmap.add_argument("--roadmap-figure", help="write the roadmap graph figure here")
+    roadmap.add_argument("--roadmap-figure", type=_figure,
+                         help="write the roadmap graph figure here")
     roadmap.add_argument("--full", action="store_true",
                          help="the full 3-DOF roadmap, all legs free (cached)")
-    roadmap.add_argument("--slice-figure", help="with --full: draw the regions of a slice here")
-    roadmap.add_argument("--slice-rho1", type=_finite, default=17.0,
+    roadmap.add_argument("--slice-figure", type=_figure,
+                         help="with --full: draw the regions of a slice here")
+    roadmap.add_argument("--slice-rho1", type=_leg, default=17.0,
                          help="with --full: rho1 of the slice figure")
     roadmap.add_argument("--cache-dir", default=default_cache_dir())
     plan = sub.add_parser("plan", help="plan a singularity-free path between two configurations")
-    plan.add_argument("--rho1", type=_finite, default=17.0)
+    plan.add_argument("--rho1", type=_leg, default=17.0)
     plan.add_argument("--full", action="store_true",
                       help="plan on the full 3-DOF roadmap: --start and --goal give rho1 first")
     plan.add_argument("--start", type=_finite, nargs="+", required=True,
@@ -107,7 +140,7 @@ def _parser():
     plan.add_argument("--cache-dir", help="roadmap cache (default: %(default)s)",
                       default=default_cache_dir())
     cusps = sub.add_parser("cusps", help="the cusp points of the singular curve at rho1")
-    cusps.add_argument("--rho1", type=_finite, default=17.0)
+    cusps.add_argument("--rho1", type=_leg, default=17.0)
     cusps.add_argument("--cache-dir", default=default_cache_dir())
     cusps.add_argument("--trace", type=_finite, nargs=3, metavar=("MIN", "MAX", "STEP"),
                        help="trace the cusp curves across rho1 (slices at this many values)")
@@ -115,7 +148,8 @@ def _parser():
                        help="with --trace: grid step of each slice")
     plot = sub.add_parser("plot", help="draw a plan written by 'rpr3-gwr plan'")
     plot.add_argument("plan_file", metavar="PLAN.json")
-    plot.add_argument("-o", "--output", help="figure file (default: PLAN.png beside the plan)")
+    plot.add_argument("-o", "--output", type=_figure,
+                      help="figure file (default: PLAN.png beside the plan)")
     plot.add_argument("--cache-dir", default=default_cache_dir())
     return parser
 
@@ -139,9 +173,9 @@ class _Progress:
 def _cusps(args):
     if args.trace:
         low, high, step = args.trace
-        if not (0 < low <= high and step > 0) or (high - low) / step > 1000:
-            raise InvalidInputError("--trace takes 0 < MIN <= MAX and a STEP giving at most "
-                                    "1000 slices")
+        if not (0 < low <= high <= _MAX_LEG and step > 0) or (high - low) / step > 1000:
+            raise InvalidInputError(f"--trace takes 0 < MIN <= MAX <= {_MAX_LEG:g} and a STEP "
+                                    "giving at most 1000 slices")
         values = low + step * np.arange(int(math.floor((high - low) / step + 1e-9)) + 1)
         slices = [build_roadmap(PAPER_GEOMETRY, rho1_slice(float(v), step=args.step))
                   for v in values]
@@ -177,6 +211,7 @@ def _roadmap(args):
         if args.slice_figure:
             raise InvalidInputError("--slice-figure needs --full")
         grid = rho1_slice(args.rho1, tuple(args.rho2), tuple(args.rho3), args.step)
+        check_roadmap_grid(PAPER_GEOMETRY, grid)
         roadmap, hit = build_roadmap(PAPER_GEOMETRY, grid, method=args.method,
                                      progress=_Progress(sys.stderr)), False
     summary = roadmap_summary(roadmap)
@@ -186,21 +221,32 @@ def _roadmap(args):
         from .figures import slice_figure
 
         cusps = find_cusps(build_roadmap(PAPER_GEOMETRY, rho1_slice(args.slice_rho1, step=0.25)))
-        slice_figure(roadmap, {0: args.slice_rho1}, cusps).savefig(args.slice_figure, dpi=120)
+        _save(args.slice_figure, slice_figure(roadmap, {0: args.slice_rho1}, cusps))
     if args.output:
-        with open(args.output, "w", encoding="utf-8") as out:
-            out.write(roadmap_to_json(roadmap))
+        _save(args.output, roadmap_to_json(roadmap))
     if args.gexf:
-        with open(args.gexf, "w", encoding="utf-8") as out:
-            out.write(roadmap_to_gexf(roadmap))
+        _save(args.gexf, roadmap_to_gexf(roadmap))
     if args.field_figure or args.roadmap_figure:
         from .figures import field_figure, roadmap_figure
 
         if args.field_figure:
-            field_figure(roadmap).savefig(args.field_figure, dpi=120)
+            _save(args.field_figure, field_figure(roadmap))
         if args.roadmap_figure:
-            roadmap_figure(roadmap).savefig(args.roadmap_figure, dpi=120)
+            _save(args.roadmap_figure, roadmap_figure(roadmap))
     return summary
+
+
+def _save(path, content, dpi=120):
+    """Writes text or a figure to ``path``; an OS error names the file (a
+    failed write or close carries no file name)."""
+    try:
+        if isinstance(content, str):
+            with open(path, "w", encoding="utf-8") as out:
+                out.write(content)
+        else:
+            content.savefig(path, dpi=dpi)
+    except OSError as exc:
+        raise OSError(exc.errno, exc.strerror or str(exc), exc.filename or path) from None
 
 
 def _plan(args):
@@ -210,6 +256,10 @@ def _plan(args):
             raise InvalidInputError(
                 f"--{name} takes {'RHO1 ' if args.full else ''}RHO2 RHO3 ALPHA_DEG"
                 f"{'' if args.full else ' (rho1 is --rho1; --full plans with rho1 free)'}")
+    options = PlanOptions(smooth=args.smooth, weighted=args.weighted,
+                          feasibility_only=args.feasibility_only,
+                          max_velocity=args.max_velocity, max_acceleration=args.max_acceleration,
+                          mode_tol=math.radians(args.alpha_tol_deg))
     if args.full:
         roadmap, _ = _full_roadmap(args.cache_dir)
         start, goal = tuple(args.start), tuple(args.goal)
@@ -219,10 +269,6 @@ def _plan(args):
         roadmap, _ = cached_roadmap(PAPER_GEOMETRY, grid, args.cache_dir, _Progress(sys.stderr))
         start, goal = (args.rho1, *args.start), (args.rho1, *args.goal)
         roadmap_doc = {"mechanism": PAPER_GEOMETRY.to_dict(), "grid": grid.to_dict()}
-    options = PlanOptions(smooth=args.smooth, weighted=args.weighted,
-                          feasibility_only=args.feasibility_only,
-                          max_velocity=args.max_velocity, max_acceleration=args.max_acceleration,
-                          mode_tol=math.radians(args.alpha_tol_deg))
     start = (*start[:3], math.radians(start[3]))
     goal = (*goal[:3], math.radians(goal[3]))
     header = {"roadmap": roadmap_doc, "request": {"start": list(start), "goal": list(goal)}}
@@ -236,30 +282,50 @@ def _plan(args):
         code = 1
     result["plan_time_s"] = time.perf_counter() - begin
     if args.output:
-        with open(args.output, "w", encoding="utf-8") as out:
-            json.dump(result, out)
+        _save(args.output, json.dumps(result))
     return result, code
+
+
+def _read_plan(path):
+    """The mechanism, grid and plan of a file written by ``plan``; what a
+    figure reads of the plan is checked (else ``InvalidInputError``)."""
+    try:
+        with open(path, encoding="utf-8") as stream:
+            plan = json.load(stream)
+        if plan["roadmap"].get("full"):
+            raise InvalidInputError(f"{path} is a --full plan: 'plot' draws plans at fixed "
+                                    "rho1 (the waypoints are in the JSON)")
+        mechanism = mechanism_from_dict(plan["roadmap"]["mechanism"])
+        grid = Grid.from_dict(plan["roadmap"]["grid"])
+        if "error" in plan or not plan.get("waypoints"):
+            raise InvalidInputError(f"{path} holds no trajectory to draw")
+        for name, size in (("joints", mechanism.n_joints), ("pose", mechanism.pose_size)):
+            values = np.array([w[name] for w in plan["waypoints"]], dtype=float)
+            if values.shape[1:] != (size,) or not np.all(np.isfinite(values)):
+                raise ValueError(f"the waypoints' {name} are not {size} finite numbers each")
+        paths = plan.get("global_paths") or [[]]
+        if not all(isinstance(p, int) for p in paths[max(plan.get("path_index", 0), 0)]):
+            raise ValueError("its global path is not a list of patch ids")
+    except InvalidInputError:
+        raise
+    # ValueError: also a file that is not UTF-8 or not JSON.
+    except (KeyError, TypeError, AttributeError, ValueError, IndexError) as exc:
+        raise InvalidInputError(f"{path} is not a plan written by 'rpr3-gwr plan' "
+                                f"({exc})") from None
+    if max([a.high for a in grid.axes] + [v for _, v in grid.fixed]) > _MAX_LEG:
+        raise InvalidInputError(f"the grid of {path} is out of range: legs are at most "
+                                f"{_MAX_LEG:g} length units")
+    return mechanism, grid, plan
 
 
 def _plot(args):
     from .figures import plan_figure
 
-    with open(args.plan_file, encoding="utf-8") as stream:
-        try:
-            plan = json.load(stream)
-            if plan["roadmap"].get("full"):
-                raise InvalidInputError(f"{args.plan_file} is a --full plan: 'plot' draws plans "
-                                        "at fixed rho1 (the waypoints are in the JSON)")
-            mechanism = mechanism_from_dict(plan["roadmap"]["mechanism"])
-            grid = Grid.from_dict(plan["roadmap"]["grid"])
-        except (json.JSONDecodeError, KeyError, TypeError) as exc:
-            raise InvalidInputError(f"{args.plan_file} is not a plan written by 'rpr3-gwr plan'"
-                                    f" ({exc})") from None
-    if "error" in plan or not plan.get("waypoints"):
-        raise InvalidInputError(f"{args.plan_file} holds no trajectory to draw")
+    mechanism, grid, plan = _read_plan(args.plan_file)
+    check_roadmap_grid(mechanism, grid)
     roadmap, _ = cached_roadmap(mechanism, grid, args.cache_dir, _Progress(sys.stderr))
     output = args.output or os.path.splitext(args.plan_file)[0] + ".png"
-    plan_figure(roadmap, plan).savefig(output, dpi=110)
+    _save(output, plan_figure(roadmap, plan), dpi=110)
     return {"figure": output}, 0
 
 
@@ -275,9 +341,17 @@ def main(argv=None):
     except GWRError as exc:
         parser.exit(2, f"{parser.prog}: error: {exc}\n")
     except OSError as exc:
-        parser.exit(2, f"{parser.prog}: error: {exc.strerror}: {exc.filename}\n")
-    json.dump(result, sys.stdout, indent=1)
-    sys.stdout.write("\n")
+        where = f"{exc.filename}: " if exc.filename else ""
+        parser.exit(2, f"{parser.prog}: error: {where}{exc.strerror or exc}\n")
+    try:
+        json.dump(result, sys.stdout, indent=1)
+        sys.stdout.write("\n")
+        sys.stdout.flush()
+    except BrokenPipeError:
+        # The reader has gone (``| head``): stop quietly as other tools do,
+        # with stdout on /dev/null so that the flush at exit cannot fail again.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
     return code
 
 

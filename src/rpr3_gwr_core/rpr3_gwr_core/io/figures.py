@@ -198,11 +198,24 @@ def plan_figure(roadmap, plan, sheet_stride=6):
     Returns
     -------
     matplotlib.figure.Figure
+
+    Raises
+    ------
+    InvalidInputError
+        If the grid is not 2-D, or the plan's global path goes through
+        patches the roadmap has not (it was planned on another grid).
     """
     seg = roadmap.segmentation
     grid = seg.field.grid
     mechanism = roadmap.mechanism
     u, v, labels, _ = _plane(roadmap)
+    paths = plan.get("global_paths") or [[]]
+    chosen = paths[max(plan.get("path_index", 0), 0)]
+    unknown = set(chosen) - set(seg.patches)
+    if unknown:
+        raise InvalidInputError(f"the plan's global path goes through patches "
+                                f"{sorted(unknown)} that the roadmap has not: it was planned "
+                                "on another grid")
     iu, iv = grid.axis_joints
     mode = mechanism.mode_coordinate
     joints = np.array([w["joints"] for w in plan["waypoints"]]).reshape(-1, mechanism.n_joints)
@@ -218,8 +231,6 @@ def plan_figure(roadmap, plan, sheet_stride=6):
     ax.plot(joints[-1:, iu], joints[-1:, iv], "r*", ms=12, label="goal")
     ax.set_xlabel(labels[0])
     ax.set_ylabel(labels[1])
-    paths = plan.get("global_paths") or [[]]
-    chosen = paths[max(plan.get("path_index", 0), 0)]
     ax.set_title("global path " + " → ".join(str(p) for p in chosen))
     ax.legend(loc="upper left")
     ax3 = fig.add_subplot(1, 2, 2, projection="3d")

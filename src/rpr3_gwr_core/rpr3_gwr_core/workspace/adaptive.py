@@ -50,13 +50,19 @@ from scipy.sparse.csgraph import dijkstra
 from ..exceptions import InvalidInputError
 from .continuity import match_solutions
 from .field import compute_field
-from .grid import Axis, Grid, GridBase, lattice_box
+from .grid import MAX_GRID_CELLS, Axis, Grid, GridBase, lattice_box
 
 __all__ = ["AdaptiveGrid", "refine", "grid_from_dict", "DEFAULT_REFINEMENT",
            "DEFAULT_REFINE_MARGIN"]
 
 DEFAULT_REFINEMENT = 4
 DEFAULT_REFINE_MARGIN = 0.02
+
+# Most points of the fine lattice, which is tabulated whole (the points
+# taken, their cells, the cell volumes): about 50 bytes per point at the
+# peak, so 64 million points stay near the 3 GB of a build of MAX_GRID_CELLS
+# cells.  The full 3-DOF grid's lattice has 8 million.
+_MAX_LATTICE_POINTS = 16 * MAX_GRID_CELLS
 
 
 class AdaptiveGrid(GridBase):
@@ -76,6 +82,14 @@ class AdaptiveGrid(GridBase):
     ----------
     axes : tuple of Axis
         The fine lattice: the base's ranges with steps divided by ``refinement``.
+
+    Raises
+    ------
+    InvalidInputError
+        If an argument is malformed, the fine lattice has more than
+        ``_MAX_LATTICE_POINTS`` points or the grid more than
+        :data:`~.grid.MAX_GRID_CELLS` cells (both checked before the cells
+        are listed).
     """
 
     def __init__(self, base, refinement, blocks):
@@ -95,9 +109,14 @@ class AdaptiveGrid(GridBase):
             raise InvalidInputError("refined block index outside the base grid")
         self.blocks = blocks
         r = self.refinement
+        self.fine_shape = tuple((n - 1) * r + 1 for n in base.shape)
+        if math.prod(self.fine_shape) > _MAX_LATTICE_POINTS:
+            raise InvalidInputError(
+                f"refining {base.shape} base points {r} times gives a fine lattice of "
+                f"{math.prod(self.fine_shape)} points, more than the limit of "
+                f"{_MAX_LATTICE_POINTS}")
         self.axes = tuple(Axis(a.joint, a.low, a.low + a.step * (a.count - 1), a.step / r)
                           for a in base.axes)
-        self.fine_shape = tuple((n - 1) * r + 1 for n in base.shape)
         self._index = self._sample_points()
         self._pairs = None
         self._volumes = None
@@ -114,6 +133,9 @@ class AdaptiveGrid(GridBase):
         for start in range(0, len(corner), 4096):
             inside = (corner[start:start + 4096, None, :] + offsets[None]).reshape(-1, self.ndim)
             flat[np.ravel_multi_index(tuple(inside.T), self.fine_shape)] = True
+        size = int(np.count_nonzero(flat))
+        if size > MAX_GRID_CELLS:
+            raise InvalidInputError(f"grid of {size} cells exceeds the limit of {MAX_GRID_CELLS}")
         return np.flatnonzero(flat)
 
     def __eq__(self, other):

@@ -4,7 +4,9 @@ A grid is a list of axes, each a joint index with a range and a step; the
 other joints keep fixed values.  The paper's grid is two axes (rho2 and rho3
 in [0, 50], step 0.125) at fixed rho1 = 17; the full 3-DOF roadmap is three
 axes.  Cells are the grid's sample points, numbered row-major over the axes
-in their order: cell ``(i, j)`` of a 2-D grid is ``i * n_1 + j``.
+in their order: cell ``(i, j)`` of a 2-D grid is ``i * n_1 + j``.  A grid
+has at most :data:`MAX_GRID_CELLS` cells, and :func:`check_roadmap_grid`
+tells before a build whether a grid can give a roadmap at all.
 """
 
 from dataclasses import dataclass
@@ -20,7 +22,19 @@ from scipy.ndimage import distance_transform_edt
 from ..exceptions import InvalidInputError, OutOfGridError
 from .continuity import neighbour_pairs
 
-__all__ = ["Axis", "GridBase", "Grid", "lattice_box", "lattice_cell"]
+__all__ = ["Axis", "GridBase", "Grid", "MAX_GRID_CELLS", "check_roadmap_grid", "lattice_box",
+           "lattice_cell"]
+
+# Most cells of any grid, about 4 million (2000 x 2000): a roadmap build
+# takes about 0.75 kB per cell at its peak (a process building a 1001 x 1001
+# slice peaks at 0.95 GB resident), so a grid at the limit takes about 3 GB,
+# and far past it the machine runs out of memory before the build ends.
+# Grids check it when made, before anything is allocated.
+MAX_GRID_CELLS = 4_000_000
+
+# Cells :func:`check_roadmap_grid` solves to tell whether a grid has enough
+# solvable cells: a spread sample, so the check stays fast on any grid.
+_PROBE_CELLS = 4096
 
 
 def _real(value, name):
@@ -45,6 +59,12 @@ class Axis:
         Inclusive range [joint unit].
     step : float
         Spacing of its cells [joint unit].
+
+    Raises
+    ------
+    InvalidInputError
+        If a value is not a finite number, ``step <= 0``, ``high < low``, or
+        the axis has more than :data:`MAX_GRID_CELLS` cells.
     """
 
     joint: int
@@ -63,6 +83,11 @@ class Axis:
         if high < low:
             raise InvalidInputError(
                 f"an axis' range must satisfy low <= high, got ({low}, {high})")
+        # Compared as floats: a tiny step or a huge range overflows int().
+        if not (high - low) / step < MAX_GRID_CELLS:
+            raise InvalidInputError(
+                f"an axis from {low:g} to {high:g} by {step:g} has more than "
+                f"{MAX_GRID_CELLS} cells, the limit of a grid")
         object.__setattr__(self, "joint", int(self.joint))
         for name, value in (("low", low), ("high", high), ("step", step)):
             object.__setattr__(self, name, value)
@@ -171,6 +196,13 @@ class Grid(GridBase):
         The sampled joints, in the order of the cell numbering.
     fixed : tuple of (int, float)
         ``(joint, value)`` of every joint not on an axis.
+
+    Raises
+    ------
+    InvalidInputError
+        If the axes and fixed joints do not name each joint once, the grid
+        has more than :data:`MAX_GRID_CELLS` cells, or its cell volume (the
+        product of the steps) overflows.
     """
 
     axes: tuple
@@ -189,6 +221,14 @@ class Grid(GridBase):
         if joints != list(range(len(joints))):
             raise InvalidInputError(f"the axes and fixed joints must name joints 0..n-1 once "
                                     f"each, got {joints}")
+        size = math.prod(a.count for a in axes)
+        if size > MAX_GRID_CELLS:
+            raise InvalidInputError(f"grid of {size} cells exceeds the limit of {MAX_GRID_CELLS}")
+        # Cell volumes and face measures are products of steps: no product of
+        # some of them may overflow.
+        if not math.isfinite(math.prod(max(a.step, 1.0) for a in axes)):
+            raise InvalidInputError(f"the steps {[a.step for a in axes]} overflow the volume "
+                                    "of a cell")
         object.__setattr__(self, "axes", axes)
         object.__setattr__(self, "fixed", tuple(sorted(fixed)))
 
@@ -321,6 +361,42 @@ class Grid(GridBase):
         except (KeyError, TypeError) as exc:
             raise InvalidInputError(f"malformed grid: {exc}") from exc
 
+
+def check_roadmap_grid(mechanism, grid, min_region_cells=8):
+    """Refuse a grid whose roadmap would be empty, before it is built.
+
+    A grid gives a roadmap only with faces along every axis (two cells or
+    more along each) and at least ``min_region_cells`` cells that have a
+    direct-kinematic solution (fewer make no region).  The solvable cells
+    are counted on ``_PROBE_CELLS`` cells spread over the grid (all of them
+    on a smaller grid) and scaled to its size.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+    grid : GridBase
+    min_region_cells : int
+        Fewest cells of a region, as :func:`~.roadmap.build_roadmap` takes it.
+
+    Raises
+    ------
+    InvalidInputError
+        If the grid has one cell along an axis, or too few solvable cells.
+    """
+    counts = [a.count for a in grid.axes]
+    if min(counts) < 2:
+        raise InvalidInputError(f"a grid of {' x '.join(map(str, counts))} cells has no faces "
+                                "along one axis: give each axis at least two cells")
+    probe = np.unique(np.linspace(0, grid.size - 1, _PROBE_CELLS).astype(np.int64))
+    count, _ = mechanism.solve(np.array([grid.joints_of(cell) for cell in probe]))
+    solvable = np.count_nonzero(count) * grid.size / probe.size
+    if solvable < min_region_cells:
+        names = mechanism.joint_names
+        at = ", ".join(f"{names[joint]} = {value:g}" for joint, value in grid.fixed)
+        raise InvalidInputError(
+            f"about {solvable:.0f} cells of the grid have a direct-kinematic solution"
+            f"{' at ' + at if at else ''}, fewer than one region needs ({min_region_cells}): "
+            "its roadmap would be empty")
 
 
 @functools.lru_cache(maxsize=16)

@@ -1,0 +1,291 @@
+"""Hostile and valid arguments to every subcommand of ``rpr3-gwr``.
+
+Whatever the arguments, the tool answers with exit code 0 and JSON on
+stdout, or fails with code 1 or 2 and exactly one error: an ``error`` object
+on stdout (a plan that cannot be made) or one line on stderr; never a
+traceback, never a numpy warning.  The fuzz calls ``main`` in this process;
+a broken pipe is tried on the installed console script.
+
+Every argument that could start a long build is drawn from pools whose valid
+values make small grids ('roadmap' always has a step, of 0.5 or more when
+valid, and ranges within [0, 50]), the cached 401 x 401 slice at rho1 = 17,
+or the refusals of the grid checks; the full 3-DOF roadmap is only named
+where an argument error comes first.
+"""
+
+import contextlib
+import io
+import json
+import shutil
+import subprocess
+import warnings
+
+import pytest
+from hypothesis import example, given, settings, strategies as st
+
+from rpr3_gwr_core.io.cli import main
+
+PAPER_START, PAPER_GOAL = ["12", "18", "122.82"], ["10", "25", "-24.24"]
+
+
+def _mostly(usual, rare):
+    """``usual`` three times in four, else ``rare`` (hypothesis starts from 0:
+    ``usual`` is the simpler)."""
+    return st.integers(0, 3).flatmap(lambda k: rare if k == 3 else usual)
+
+
+# Valid three times in four; as legs and steps they make grids of at most
+# 101 x 101 cells, or grids the checks refuse.
+NUMBER = _mostly(st.sampled_from(["17", "12", "18", "50", "0", "0.5", "5", " 17", "-0"]),
+                 st.sampled_from(["-1", "1e-4", "1e-300", "5e-324", "nan", "-nan", "inf",
+                                  "-inf", "1e308", "-1e308", "1e7", "abc", "", "0x1p3"]))
+# Grid steps of 'roadmap' (its default, 0.125, is a 401 x 401 build).
+STEP = _mostly(st.sampled_from(["0.5", "1", "5", "17"]), NUMBER)
+# The only valid rho1 of commands that build the default 401 x 401 slice.
+SLICE_RHO1 = st.sampled_from(["17", "0", "-1", "nan", "inf", "1e308", "1e7", "abc"])
+# Steps of --trace's slices: valid ones make grids of at most 51 x 51 cells.
+TRACE_STEP = st.sampled_from(["1", "5", "17", "0", "-1", "1e-4", "nan", "inf", "1e308", "x"])
+JUNK = st.sampled_from(["--bogus", "-x", "extra", "--", "--rho1", "-o"])
+
+
+def _numbers(low, high):
+    return st.lists(NUMBER, min_size=low, max_size=high)
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    """Paths the fuzz writes and reads: good ones, a directory, a path under a
+    file, a missing folder, files of the kernel that cannot be written, and
+    plan files valid, damaged or not JSON at all."""
+    root = tmp_path_factory.mktemp("cli-fuzz")
+    (root / "folder").mkdir()
+    (root / "folder.png").mkdir()
+    (root / "a-file").write_text("")
+    plan = root / "plan.json"
+    with contextlib.redirect_stdout(io.StringIO()):
+        assert main(["plan", "--start", *PAPER_START, "--goal", *PAPER_GOAL,
+                     "-o", str(plan)]) == 0
+    good = json.loads(plan.read_text())
+    plans = {"valid": good}
+    for name, step in (("tiny-step", 1e-5), ("coarse-step", 5.0), ("huge-step", 1e308)):
+        changed = json.loads(plan.read_text())
+        for axis in changed["roadmap"]["grid"]["axes"]:
+            axis["step"] = step
+        plans[name] = changed
+    huge = json.loads(plan.read_text())
+    huge["roadmap"]["grid"]["fixed"][0]["value"] = 1e308
+    plans["huge-rho1"] = huge
+    plans["full"] = dict(good, roadmap={"full": True})
+    plans["failed"] = dict(good, feasible=False, error={"code": "INFEASIBLE", "message": "no"})
+    plans["no-waypoints"] = dict(good, waypoints=[])
+    plans["bad-waypoints"] = dict(good, waypoints=[{"joints": [1, 2], "pose": "x"}])
+    plans["bad-path"] = dict(good, global_paths=[["a"]], path_index=0)
+    plans["bad-index"] = dict(good, path_index=7)
+    plans["bad-mechanism"] = dict(good, roadmap={"mechanism": dict(good["roadmap"]["mechanism"],
+                                                                   d1=-1.0),
+                                                 "grid": good["roadmap"]["grid"]})
+    plans["bad-kind"] = dict(good, roadmap={"mechanism": {"kind": "delta"},
+                                            "grid": good["roadmap"]["grid"]})
+    for name, document in plans.items():
+        (root / f"{name}.plan").write_text(json.dumps(document))
+    for name, text in (("empty", ""), ("list", "[]"), ("object", "{}"), ("number", "1e999"),
+                       ("truncated", plan.read_text()[:200]), ("roadmap-list", '{"roadmap": []}'),
+                       ("nan-grid", '{"roadmap": {"mechanism": {}, "grid": NaN}}')):
+        (root / f"{name}.plan").write_text(text)
+    (root / "binary.plan").write_bytes(b"\xff\xfe\x00garbage")
+    return root
+
+
+def _run(argv):
+    """``main(argv)`` with its streams captured: exit code, stdout, stderr.
+    An exception out of ``main``, a traceback in a shell, fails the test as
+    it is."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), \
+            warnings.catch_warnings():
+        # An overflow or invalid value on the way is a failure, not a result.
+        warnings.simplefilter("error", RuntimeWarning)
+        try:
+            code = main(argv)
+        except SystemExit as stop:
+            code = stop.code
+    return code, out.getvalue(), err.getvalue()
+
+
+def _strict_json(text):
+    def refuse(constant):
+        raise AssertionError(f"{constant} in the JSON output")
+    return json.loads(text, parse_constant=refuse)
+
+
+def _check(argv):
+    code, out, err = _run(argv)
+    assert "Traceback" not in err, (argv, err)
+    assert code in (0, 1, 2), (argv, code, err)
+    if code == 0:
+        _strict_json(out)
+    elif out:
+        document = _strict_json(out)
+        assert set(document["error"]) == {"code", "message"} and err == "", (argv, out, err)
+    else:
+        assert err.startswith("rpr3-gwr") and ": error: " in err, (argv, err)
+        assert err.count("\n") == 1 and err.endswith("\n"), (argv, err)
+
+
+def _out_file(files):
+    return _mostly(st.just(files / "out.json"),
+                   st.sampled_from([files / "folder", files / "a-file" / "x",
+                                    files / "missing" / "x.json", "/proc/version", "/dev/full"]))
+
+
+def _figure_file(files):
+    return _mostly(st.sampled_from([files / "f.png", files / "f.svg"]),
+                   st.sampled_from([files / "f.xyz", files / "f.", files / "folder.png",
+                                    files / "a-file" / "x.png", files / "missing" / "f.pdf",
+                                    "/proc/version"]))
+
+
+@st.composite
+def _options(draw, table, required=()):
+    """Some of ``table``'s options (each one time in five, all of
+    ``required``), in any order, sometimes with a stray argument."""
+    names = [n for n in table if n in required or draw(st.integers(0, 4)) == 4]
+    names = draw(st.permutations(names))
+    argv = []
+    for name in names:
+        value = draw(table[name])
+        argv += [name] + [str(v) for v in (value if isinstance(value, list) else [value])]
+    return argv + (draw(st.lists(JUNK, max_size=1)) if draw(st.integers(0, 4)) == 4 else [])
+
+
+def _dk():
+    return _mostly(_numbers(3, 3), _numbers(0, 4)).map(lambda numbers: ["dk", *numbers])
+
+
+def _roadmap(files):
+    figure = _figure_file(files)
+    options = _options({
+        "--rho1": NUMBER, "--rho2": _mostly(_numbers(2, 2), _numbers(1, 3)),
+        "--rho3": _mostly(_numbers(2, 2), _numbers(1, 3)),
+        "--step": STEP, "--method": st.sampled_from(["components", "rds", "bogus"]),
+        "-o": _out_file(files), "--gexf": _out_file(files), "--field-figure": figure,
+        "--roadmap-figure": figure, "--slice-figure": figure, "--slice-rho1": NUMBER},
+        required=("--step",))
+    # --full alone would build the full roadmap: only with its argument error.
+    full = figure.map(lambda path: ["--full", "--field-figure", str(path)])
+    return st.integers(0, 5).flatmap(lambda k: full if k == 5 else options).map(
+        lambda argv: ["roadmap", *argv])
+
+
+@st.composite
+def _plan(draw, files):
+    legs = _mostly(st.one_of(st.sampled_from([PAPER_START, PAPER_GOAL]), _numbers(3, 3)),
+                   _numbers(0, 5))
+    start, goal = draw(legs), draw(legs)
+    argv = draw(_options({
+        "--rho1": SLICE_RHO1, "--start": st.just(start), "--goal": st.just(goal),
+        "--smooth": st.just([]), "--weighted": st.just([]), "--feasibility-only": st.just([]),
+        "--max-velocity": _mostly(st.tuples(NUMBER, NUMBER).map(
+            lambda limits: [limits[0], "--max-acceleration", limits[1]]), NUMBER),
+        "--alpha-tol-deg": NUMBER,
+        "-o": _out_file(files)}, required=("--start", "--goal")))
+    # --full with four legs in both would build the full roadmap.
+    if (len(start), len(goal)) != (4, 4) and draw(st.integers(0, 5)) == 5:
+        argv.append("--full")
+    return ["plan", *argv]
+
+
+def _plot(files):
+    plans = sorted(str(p) for p in files.glob("*.plan")) + [
+        str(files / "missing.json"), str(files / "folder"), "/proc/version"]
+    options = _options({"-o": _figure_file(files)})
+    plan = st.one_of(st.just(str(files / "plan.json")), st.sampled_from(plans))
+    return st.tuples(plan, options).map(
+        lambda case: ["plot", case[0], *case[1]])
+
+
+def _cusps():
+    ends = st.sampled_from(["12", "17", "18", "0", "-1", "nan", "inf", "1e308", "abc", "1e-4",
+                            "5"])
+    trace = st.tuples(_mostly(st.lists(ends, min_size=3, max_size=3),
+                              st.lists(ends, min_size=2, max_size=4)), TRACE_STEP).map(
+        lambda case: ["--trace", *case[0], "--step", case[1]])
+    plain = _options({"--rho1": SLICE_RHO1})
+    return st.one_of(trace, plain).map(lambda argv: ["cusps", *argv])
+
+
+@settings(max_examples=150, deadline=None, database=None)
+@given(argv=_dk())
+@example(argv=["dk", "1e308", "1e308", "1e308"])
+@example(argv=["dk", "17", "20", "25"])
+def test_dk_answers_json_or_one_error(argv):
+    _check(argv)
+
+
+@settings(max_examples=60, deadline=None, database=None)
+@given(data=st.data())
+@example(data=["roadmap", "--rho1", "1e308"])
+@example(data=["roadmap", "--rho2", "0", "1e308"])
+@example(data=["roadmap", "--step", "1e-4"])
+@example(data=["roadmap", "--field-figure", "f.xyz"])
+@example(data=["roadmap", "--rho2", "0", "0"])
+@example(data=["roadmap", "--rho1", "100", "--step", "1"])
+@example(data=["roadmap", "--step", "2", "-o", "/proc/version"])
+def test_roadmap_answers_json_or_one_error(data, files):
+    _check(data if isinstance(data, list) else data.draw(_roadmap(files)))
+
+
+@settings(max_examples=100, deadline=None, database=None)
+@given(data=st.data())
+@example(data=["plan", "--rho1", "1e308", "--start", *PAPER_START, "--goal", *PAPER_GOAL])
+@example(data=["plan", "--start", *PAPER_START, "--goal", *PAPER_GOAL, "--smooth"])
+def test_plan_answers_json_or_one_error(data, files):
+    _check(data if isinstance(data, list) else data.draw(_plan(files)))
+
+
+@settings(max_examples=40, deadline=None, database=None)
+@given(data=st.data())
+def test_plot_answers_json_or_one_error(data, files):
+    _check(data.draw(_plot(files)))
+
+
+@settings(max_examples=30, deadline=None, database=None)
+@given(data=st.data())
+@example(data=["cusps", "--trace", "12", "18", "1", "--step", "1e308"])
+def test_cusps_answers_json_or_one_error(data):
+    _check(data if isinstance(data, list) else data.draw(_cusps()))
+
+
+@pytest.fixture(scope="module")
+def console_script():
+    script = shutil.which("rpr3-gwr")
+    if script is None:
+        pytest.skip("the rpr3-gwr console script is not installed (source ros2_ws/env.sh)")
+    return script
+
+
+@pytest.mark.parametrize("argv", [["cusps"], ["dk", "17", "20", "25"]])
+def test_a_reader_that_leaves_early_ends_the_tool_quietly(argv, console_script):
+    # The read end is closed before the tool writes, as ``| head -c 10``
+    # does once it has its bytes.
+    tool = subprocess.Popen([console_script, *argv], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    try:
+        tool.stdout.close()
+        _, err = tool.communicate(timeout=120)
+    finally:
+        tool.kill()
+        tool.wait()
+    assert tool.returncode == 1
+    assert err == b""
+
+
+@pytest.mark.parametrize("argv, reason", [
+    (["dk", "1e308", "1e308", "1e308"], "out of range"),
+    (["roadmap", "--step", "1e-4"], "exceeds the limit of 4000000"),
+])
+def test_the_console_script_fails_with_one_line(argv, reason, console_script):
+    done = subprocess.run([console_script, *argv], capture_output=True, text=True, timeout=120,
+                          check=False)
+    assert done.returncode == 2 and done.stdout == ""
+    assert done.stderr.count("\n") == 1 and reason in done.stderr
