@@ -27,17 +27,17 @@ True
 
 from .exceptions import (AssemblyModeError, FixedJointMismatchError, GWRError,
                          InfeasiblePathError, InvalidInputError, NoSolutionError, OutOfGridError,
-                         SingularityError, ValidationError)
+                         PlanningTimeoutError, SingularityError, ValidationError)
 from .mechanisms import Geometry, Mechanism, mechanism_from_dict
 from .paper import PAPER_GEOMETRY, PAPER_GRID, rho1_slice
-from .planning import Plan, PlanOptions, Planner
+from .planning import Plan, PlanOptions, Planner, Termination
 from .workspace import Axis, Grid, Roadmap, aspect_groups, build_roadmap, compute_field
 
 __all__ = [
     "Mechanism", "Geometry", "mechanism_from_dict", "PAPER_GEOMETRY",
     "Axis", "Grid", "PAPER_GRID", "rho1_slice", "compute_field", "build_roadmap", "Roadmap",
-    "aspect_groups", "Planner", "PlanOptions", "Plan",
+    "aspect_groups", "Planner", "PlanOptions", "Plan", "Termination",
     "GWRError", "InvalidInputError", "OutOfGridError", "FixedJointMismatchError",
     "NoSolutionError", "AssemblyModeError", "SingularityError", "InfeasiblePathError",
-    "ValidationError",
+    "ValidationError", "PlanningTimeoutError",
 ]

@@ -70,3 +70,9 @@ class ValidationError(GWRError):
     """A computed plan failed the independent trajectory validator."""
 
     code = "VALIDATION_FAILED"
+
+
+class PlanningTimeoutError(GWRError):
+    """Planning reached its time limit before any path passed the validator."""
+
+    code = "TIMEOUT"

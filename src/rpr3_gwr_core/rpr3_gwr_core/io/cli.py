@@ -10,7 +10,7 @@ Subcommands::
                      [--slice-figure FILE] [--slice-rho1 17]
     rpr3-gwr plan --rho1 17 --start RHO2 RHO3 ALPHA_DEG --goal RHO2 RHO3 ALPHA_DEG
                   [--smooth] [--weighted] [--feasibility-only]
-                  [--max-velocity V --max-acceleration A] [-o FILE]
+                  [--max-velocity V --max-acceleration A] [--time-limit SECONDS] [-o FILE]
     rpr3-gwr plan --full --start RHO1 RHO2 RHO3 ALPHA_DEG --goal RHO1 RHO2 RHO3 ALPHA_DEG
                   [the options above]
     rpr3-gwr plot PLAN.json [-o FIGURE]
@@ -42,7 +42,7 @@ from ..exceptions import GWRError, InvalidInputError
 from ..mechanisms import mechanism_from_dict
 from ..mechanisms.rpr3 import aspect, direct_kinematics
 from ..paper import FULL_BASE_GRID, FULL_REFINEMENT, PAPER_GEOMETRY, rho1_slice
-from ..planning import PlanOptions, Planner
+from ..planning import NEVER, PlanOptions, Planner, Termination
 from ..workspace import Grid, build_roadmap
 from ..workspace.cusps import cusp_curves, find_cusps
 from ..workspace.grid import check_roadmap_grid
@@ -77,6 +77,13 @@ def _leg(text):
     if value > _MAX_LEG:
         raise argparse.ArgumentTypeError(f"{text!r} is out of range: legs are at most "
                                          f"{_MAX_LEG:g} length units")
+    return value
+
+
+def _duration(text):
+    value = _finite(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r} is negative: give a duration in seconds")
     return value
 
 
@@ -136,6 +143,9 @@ def _parser():
                       help="joint acceleration limit [length unit/s^2]")
     plan.add_argument("--alpha-tol-deg", type=_finite, default=1.0,
                       help="tolerance on the start and goal orientations [deg]")
+    plan.add_argument("--time-limit", type=_duration, metavar="SECONDS",
+                      help="stop planning after this long (the roadmap loaded): the valid path "
+                           "found by then, or a TIMEOUT error")
     plan.add_argument("-o", "--output", help="also write the JSON here")
     plan.add_argument("--cache-dir", help="roadmap cache (default: %(default)s)",
                       default=default_cache_dir())
@@ -274,7 +284,9 @@ def _plan(args):
     header = {"roadmap": roadmap_doc, "request": {"start": list(start), "goal": list(goal)}}
     begin = time.perf_counter()
     try:
-        result = dict(header, **Planner(roadmap).plan(start, goal, options).to_dict())
+        planner = Planner(roadmap)
+        termination = NEVER if args.time_limit is None else Termination.after(args.time_limit)
+        result = dict(header, **planner.plan(start, goal, options, termination).to_dict())
         code = 0
     except GWRError as exc:
         result = dict(header, feasible=False, reason=getattr(exc, "reason", exc.code.lower()),

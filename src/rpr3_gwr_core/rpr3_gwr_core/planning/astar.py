@@ -38,15 +38,20 @@ keeps the search near one of them.
 import numba
 import numpy as np
 
+from .termination import monotonic
+
 __all__ = ["adjacency", "node_positions", "edge_quanta", "gate_nodes", "work_arrays",
-           "gate_distances", "layered_astar",
-           "UNREACHED"]
+           "gate_distances", "layered_astar", "UNREACHED", "TIMED_OUT"]
 
 # Cost of a node the search did not reach; far above any path's, with room
 # to add estimates without overflow.
 UNREACHED = 2**50
+# The cost layered_astar returns when its deadline passed before the target.
+TIMED_OUT = -1
 # Buckets of the open set's ring; estimates farther ahead wait in an overflow list.
 _RING = 4096
+# Nodes settled between two looks at the clock (a look costs about 30 ns).
+_CLOCK_PERIOD = 1024
 
 
 @numba.njit(cache=True)
@@ -177,11 +182,12 @@ def work_arrays(n_nodes, n_links):
 @numba.njit(cache=True, nogil=True)
 def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin, clearance,
             penalty, position, layer, sources, target, blocked, cost_floor, fields,
-            to_gate_start, rest, landmark_start, landmark_goal, g, pred, closed, touched,
-            entry_node, entry_next, waiting_node, waiting_key):
+            to_gate_start, rest, landmark_start, landmark_goal, deadline, g, pred, closed,
+            touched, entry_node, entry_next, waiting_node, waiting_key):
     """Least costs from ``sources`` through the layers, up to ``target`` (all
-    reachable nodes when it is -1); returns how many nodes it touched, which
-    are the first entries of ``touched``."""
+    reachable nodes when it is -1), stopping when the monotonic clock passes
+    ``deadline``; returns how many nodes it touched, which are the first
+    entries of ``touched``, and whether it stopped for the deadline."""
     goal = max(target, 0)
     last = layer[node_patch[target]] if target >= 0 else 0
     # The ring's buckets are stacks linked through the entries.
@@ -201,6 +207,7 @@ def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_marg
     pending = 0
     current = 0
     taken_at = -1
+    settled = 0
     while True:
         if pending == 0:
             if waiting == 0:
@@ -235,6 +242,9 @@ def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_marg
         closed[u] = 1
         if u == target:
             break
+        settled += 1
+        if settled % _CLOCK_PERIOD == 0 and monotonic() >= deadline:
+            return n_touched, True
         here = layer[node_patch[u]]
         cost_u = _node_cost(node_cost, node_margin, clearance, penalty, u)
         for e in range(indptr[u], indptr[u + 1]):
@@ -277,7 +287,7 @@ def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_marg
                 else:
                     waiting_node[waiting], waiting_key[waiting] = v, key
                     waiting += 1
-    return n_touched
+    return n_touched, False
 
 
 @numba.njit(cache=True)
@@ -320,10 +330,10 @@ def gate_distances(indptr, indices, quanta, node_cell, node_patch, node_cost, no
     layer = np.full(n_patches, -1, np.int32)
     layer[k] = 0
     empty = np.zeros(0, np.int64)
-    n_touched = _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
-                        clearance, penalty, position, layer, sources, -1, empty, 0,
-                        empty, empty, empty, empty, empty, g, pred, closed, touched,
-                        entry_node, entry_next, waiting_node, waiting_key)
+    n_touched, _ = _search(indptr, indices, quanta, node_cell, node_patch, node_cost,
+                           node_margin, clearance, penalty, position, layer, sources, -1, empty,
+                           0, empty, empty, empty, empty, empty, np.inf, g, pred, closed,
+                           touched, entry_node, entry_next, waiting_node, waiting_key)
     out = g[first:stop].copy()
     _reset(g, closed, touched, n_touched)
     return out
@@ -332,8 +342,9 @@ def gate_distances(indptr, indices, quanta, node_cell, node_patch, node_cost, no
 @numba.njit(cache=True, nogil=True)
 def layered_astar(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
                   clearance, penalty, position, layer, source, target, blocked,
-                  cost_floor, fields, to_gate_start, rest, landmark_start, landmark_goal, g,
-                  pred, closed, touched, entry_node, entry_next, waiting_node, waiting_key):
+                  cost_floor, fields, to_gate_start, rest, landmark_start, landmark_goal,
+                  deadline, g, pred, closed, touched, entry_node, entry_next, waiting_node,
+                  waiting_key):
     """Least-cost node path from ``source`` to ``target`` through the layers.
 
     Parameters
@@ -375,6 +386,9 @@ def layered_astar(indptr, indices, quanta, node_cell, node_patch, node_cost, nod
         The last layer's patch's distances to each of its gates, at
         ``fields[landmark_start[j] + v]``, and the target's: within the
         patch a node costs at least their difference.
+    deadline : float
+        [s] on the monotonic clock (:func:`~.termination.monotonic`); the
+        search stops there.
     g, pred, closed, touched, entry_node, entry_next, waiting_node, waiting_key :
         Work arrays (:func:`work_arrays`): ``g`` all :data:`UNREACHED` and
         ``closed`` all zero on entry, and so again on return.
@@ -382,19 +396,21 @@ def layered_astar(indptr, indices, quanta, node_cell, node_patch, node_cost, nod
     Returns
     -------
     nodes : ndarray of int64
-        The path, empty when the target cannot be reached.
+        The path, empty when the target cannot be reached or the deadline
+        passed first.
     cost : int
-        Its cost: lengths in half quanta times node costs in units.
+        Its cost: lengths in half quanta times node costs in units;
+        :data:`TIMED_OUT` when the deadline passed first.
     """
     sources = np.full(1, source, np.int64)
-    n_touched = _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
-                        clearance, penalty, position, layer, sources, target, blocked,
-                        cost_floor, fields, to_gate_start, rest, landmark_start, landmark_goal,
-                        g, pred, closed, touched, entry_node, entry_next, waiting_node,
-                        waiting_key)
-    cost = g[target]
+    n_touched, timed_out = _search(
+        indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin, clearance,
+        penalty, position, layer, sources, target, blocked, cost_floor, fields, to_gate_start,
+        rest, landmark_start, landmark_goal, deadline, g, pred, closed, touched, entry_node,
+        entry_next, waiting_node, waiting_key)
+    cost = TIMED_OUT if timed_out else g[target]
     count = 0
-    if closed[target]:
+    if closed[target] and not timed_out:
         node = target
         while node >= 0:
             count += 1

@@ -39,9 +39,10 @@ import weakref
 
 import numpy as np
 
-from .astar import (UNREACHED, adjacency, edge_quanta, gate_distances, gate_nodes,
+from .astar import (TIMED_OUT, UNREACHED, adjacency, edge_quanta, gate_distances, gate_nodes,
                     layered_astar, node_positions, work_arrays)
-from ..exceptions import InfeasiblePathError, InvalidInputError
+from .termination import NEVER
+from ..exceptions import InfeasiblePathError, InvalidInputError, PlanningTimeoutError
 from ..workspace.segmentation import linked_solutions
 
 __all__ = ["LocalPlanner", "LocalPath", "DEFAULT_CLEARANCE_WEIGHT"]
@@ -269,8 +270,7 @@ class LocalPlanner:
         -------
         ndarray of int
         """
-        steps = np.array(self.segmentation.field.grid.steps)
-        return np.flatnonzero(np.max(np.abs(self._coords - point) / steps, axis=1) <= radius)
+        return self.segmentation.field.grid.cells_in_box(point, radius)
 
     def _node(self, k, cell, which):
         cells = self.segmentation.patches[int(self._pids[k])].cells
@@ -294,7 +294,7 @@ class LocalPlanner:
         return depth
 
     def plan(self, patches, start_cell, goal_cell, blocked=(), clearance=0.0,
-             clearance_weight=DEFAULT_CLEARANCE_WEIGHT):
+             clearance_weight=DEFAULT_CLEARANCE_WEIGHT, termination=NEVER):
         """Best cell path from a start cell to a goal cell through given patches.
 
         Parameters
@@ -313,6 +313,8 @@ class LocalPlanner:
         clearance_weight : float
             ``w`` of the paper's cell cost ``1 + w / d``; 0 gives shortest
             paths.
+        termination : Termination
+            The search stops at its deadline.
 
         Returns
         -------
@@ -326,6 +328,8 @@ class LocalPlanner:
             weight is negative.
         InfeasiblePathError
             If no path exists (a patch's solutions are cut between its gates).
+        PlanningTimeoutError
+            If the deadline passed first.
         """
         seg = self.segmentation
         if not (math.isfinite(clearance_weight) and clearance_weight >= 0):
@@ -356,10 +360,13 @@ class LocalPlanner:
             nodes, cost = layered_astar(
                 self._indptr, self._indices, self._quanta, self._node_cell, self._node_patch,
                 costs, self._node_margin, key[1], _LOW_MARGIN_FACTOR, self._position, layer,
-                source, target, blocked, floor, *heuristic, *work)
+                source, target, blocked, floor, *heuristic, termination.deadline, *work)
         finally:
             # layered_astar leaves its work arrays as it found them.
             self._work.put(work)
+        if cost == TIMED_OUT:
+            raise PlanningTimeoutError(f"the time limit passed in the local search through "
+                                       f"patches {patches}")
         # Lengths in half quanta, node costs in units: back to length times cost.
         cost = float(cost) * self._quantum / 2 / (_COST_UNITS if key[0] > 0 else 1)
         if nodes.size == 0:

@@ -17,11 +17,13 @@ import math
 
 import numpy as np
 
-from ..exceptions import GWRError, InfeasiblePathError, InvalidInputError, ValidationError
+from ..exceptions import (GWRError, InfeasiblePathError, InvalidInputError, PlanningTimeoutError,
+                          ValidationError)
 from .global_planning import RoadmapIndex, feasibility, global_paths, longer_paths
 from .local_planning import DEFAULT_CLEARANCE_WEIGHT, LocalPlanner
 from .locate import DEFAULT_MODE_TOL, locate
 from .segments import segments_clear, shortcut_path
+from .termination import NEVER
 from .trajectory import corner_cuts, cut_corners, time_parameterize
 from .validation import DEFAULT_MAX_STEP, DEFAULT_MIN_MARGIN, validate_path
 
@@ -226,7 +228,7 @@ class Planner:
         return locate(self.roadmap, configuration, mode_tol=mode_tol,
                       min_margin=self.min_margin, max_step=self.max_step)
 
-    def plan(self, start, goal, options=PlanOptions()):
+    def plan(self, start, goal, options=PlanOptions(), termination=NEVER):
         """Plan from one configuration to another.
 
         Parameters
@@ -235,6 +237,10 @@ class Planner:
             The joints, then the mode coordinate (the 3-RPR's
             ``(rho1, rho2, rho3, alpha)`` [length unit x 3, rad]).
         options : PlanOptions
+        termination : Termination
+            Where planning stops: past its deadline the plan is the valid
+            path found so far, unsmoothed if smoothing was not done yet, or
+            a ``PlanningTimeoutError`` when there is none.
 
         Returns
         -------
@@ -245,6 +251,7 @@ class Planner:
         GWRError
             ``InfeasiblePathError`` (with ``.reason``) when the roadmap has no
             path, ``ValidationError`` when no path passes the validator,
+            ``PlanningTimeoutError`` when the deadline passed before one did,
             ``InvalidInputError`` when the limits cannot time the path, or
             the locating errors of :func:`~rpr3_gwr_core.locate.locate`.
         """
@@ -266,15 +273,22 @@ class Planner:
         failures = []
         for k, path in enumerate(self._attempts(paths, s.patch, g.patch)):
             try:
-                result, joints, patches = self._validated_path(path, s, g, options.clearance)
+                if termination():
+                    raise PlanningTimeoutError("the time limit passed")
+                result, joints, patches = self._validated_path(path, s, g, options.clearance,
+                                                               termination)
             except InfeasiblePathError as exc:
                 failures.append(f"path {list(path.patches)}: {exc}")
                 continue
+            except PlanningTimeoutError as exc:
+                raise PlanningTimeoutError(
+                    f"{exc} after {len(failures)} global path(s) without a valid trajectory"
+                    + "".join(f"; {f}" for f in failures)) from None
             if not result.ok:
                 failures.append(f"path {list(path.patches)}: {result.reason}")
                 continue
             smoothed = False
-            if options.smooth and len(joints) > 2:
+            if options.smooth and len(joints) > 2 and not termination():
                 rounded = self._round(joints, patches, s, g, options.clearance,
                                       min(result.min_margin,
                                           self._kept_margin(s, g, options.clearance)))
@@ -302,18 +316,19 @@ class Planner:
             paths.append(path)
             yield path
 
-    def _validated_path(self, path, s, g, clearance):
+    def _validated_path(self, path, s, g, clearance, termination):
         """Local path along a global path that passes the validator, shortcut
         where the shortcut path passes too; when every repair of the
         shortest path fails, the same for the path the paper's clearance
         weight keeps in the middle of its patches."""
         for weight in dict.fromkeys((self.clearance_weight, _DETOUR_WEIGHT)):
-            result, joints, patches = self._repaired_path(path, s, g, clearance, weight)
+            result, joints, patches = self._repaired_path(path, s, g, clearance, weight,
+                                                          termination)
             if result.ok:
                 break
         return result, joints, patches
 
-    def _repaired_path(self, path, s, g, clearance, weight):
+    def _repaired_path(self, path, s, g, clearance, weight, termination):
         """Local path along a global path, repaired where the validator refuses it.
 
         The path's cells keep the clearance where they can, but between two
@@ -330,8 +345,11 @@ class Planner:
         tried = []
         free = list(self.roadmap.grid.axis_joints)
         for repair in range(_REPAIRS + 1):
+            if termination():
+                raise PlanningTimeoutError("the time limit passed")
             try:
-                local = self.local.plan(path.patches, s.cell, g.cell, blocked, clearance, weight)
+                local = self.local.plan(path.patches, s.cell, g.cell, blocked, clearance, weight,
+                                        termination)
             except InfeasiblePathError:
                 if not blocked:
                     raise
