@@ -77,6 +77,18 @@ def test_cells_of_and_nearby_cells(small_grid):
         grid.cell_of(np.array([math.nan, 12.0, 20.0]))
 
 
+@pytest.mark.parametrize("which", ["adaptive", "uniform"])
+def test_cells_in_box_are_the_cells_a_full_scan_finds(small_grid, which):
+    grid = small_grid if which == "adaptive" else small_grid.base
+    coords, steps = grid.coordinates(), np.array(grid.steps)
+    rng = np.random.default_rng(1)
+    for _ in range(200):
+        point = coords[rng.integers(len(coords))] + steps * rng.integers(-6, 7, 3) * 0.5
+        radius = float(rng.choice([0.0, 0.5, 1.0, 2.5, 4.5]))
+        scan = np.flatnonzero(np.max(np.abs(coords - point) / steps, axis=1) <= radius)
+        np.testing.assert_array_equal(grid.cells_in_box(point, radius), scan)
+
+
 def test_depth_counts_fine_steps_to_the_nearest_cell_outside(small_grid):
     grid = small_grid
     cells = np.arange(grid.size)

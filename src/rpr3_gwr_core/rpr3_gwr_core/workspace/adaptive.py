@@ -50,7 +50,7 @@ from scipy.sparse.csgraph import dijkstra
 from ..exceptions import InvalidInputError
 from .continuity import match_solutions
 from .field import compute_field
-from .grid import MAX_GRID_CELLS, Axis, Grid, GridBase, lattice_box
+from .grid import MAX_GRID_CELLS, Axis, Grid, GridBase, _box_points, _within_box, lattice_box
 
 __all__ = ["AdaptiveGrid", "refine", "grid_from_dict", "DEFAULT_REFINEMENT",
            "DEFAULT_REFINE_MARGIN"]
@@ -291,6 +291,20 @@ class AdaptiveGrid(GridBase):
         distance = dijkstra(graph, directed=False, indices=np.searchsorted(nodes, outside),
                             min_only=True)
         return np.minimum(distance[np.searchsorted(nodes, cells)], border)
+
+    def cells_in_box(self, point, radius):
+        """Cells whose axis values lie within ``radius`` fine steps of a point
+        along every axis, ascending (:meth:`.Grid.cells_in_box`)."""
+        index = _box_points(point, radius, np.array([a.low for a in self.axes]),
+                            np.array(self.steps), np.array(self.fine_shape))
+        cells = self._lookup(np.ravel_multi_index(tuple(index.T), self.fine_shape))
+        cells = cells[cells >= 0]
+        return _within_box(cells, self.coordinates_of(cells), point, radius, self.steps)
+
+    def coordinates_of(self, cells):
+        """Axis values of cells, shape (len(cells), ndim)."""
+        low = np.array([a.low for a in self.axes])
+        return low + self._multi(np.asarray(cells, dtype=np.int64)) * np.array(self.steps)
 
     def cells_near(self, joints, radius):
         """Cells within ``radius`` fine steps of a joint vector, nearest first,

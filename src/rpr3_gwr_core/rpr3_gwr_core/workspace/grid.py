@@ -333,6 +333,32 @@ class Grid(GridBase):
         inner = tuple(slice(1, -1) for _ in self.shape)
         return distance_transform_edt(np.pad(mask, 1))[inner].ravel()[cells]
 
+    def cells_in_box(self, point, radius):
+        """Cells whose axis values lie within ``radius`` steps of a point along
+        every axis, ascending; the lattice points of that box are looked up
+        (not every cell compared).
+
+        Parameters
+        ----------
+        point : ndarray, shape (ndim,)
+            Values on the grid's axes [joint unit].
+        radius : float
+            [steps]
+
+        Returns
+        -------
+        ndarray of int
+        """
+        index = _box_points(point, radius, np.array([a.low for a in self.axes]),
+                            np.array(self.steps), np.array(self.shape))
+        cells = np.ravel_multi_index(tuple(index.T), self.shape)
+        return _within_box(cells, self.coordinates_of(cells), point, radius, self.steps)
+
+    def coordinates_of(self, cells):
+        """Axis values of cells, shape (len(cells), ndim)."""
+        index = np.stack(np.unravel_index(np.asarray(cells, dtype=np.int64), self.shape), axis=-1)
+        return np.array([a.low for a in self.axes]) + index * np.array(self.steps)
+
     def cells_near(self, joints, radius):
         """Cells within ``radius`` steps of a joint vector, nearest first.
 
@@ -397,6 +423,26 @@ def check_roadmap_grid(mechanism, grid, min_region_cells=8):
             f"about {solvable:.0f} cells of the grid have a direct-kinematic solution"
             f"{' at ' + at if at else ''}, fewer than one region needs ({min_region_cells}): "
             "its roadmap would be empty")
+
+
+def _box_points(point, radius, low, steps, shape):
+    """Lattice indices within ``radius`` steps of ``point`` on every axis (one
+    more on each side, against rounding; the caller filters exactly), clipped
+    to ``shape``, shape (m, ndim)."""
+    here = (np.asarray(point, dtype=float) - low) / steps
+    first = np.maximum(np.floor(here - radius).astype(np.int64) - 1, 0)
+    last = np.minimum(np.ceil(here + radius).astype(np.int64) + 1, shape - 1)
+    if np.any(last < first):
+        return np.zeros((0, len(shape)), dtype=np.int64)
+    axes = [np.arange(a, b + 1) for a, b in zip(first, last)]
+    return np.stack([m.ravel() for m in np.meshgrid(*axes, indexing="ij")], axis=-1)
+
+
+def _within_box(cells, coordinates, point, radius, steps):
+    """The cells whose coordinates lie within ``radius`` steps of ``point``
+    on every axis, ascending."""
+    inside = np.max(np.abs(coordinates - point) / np.array(steps), axis=1) <= radius
+    return np.sort(cells[inside])
 
 
 @functools.lru_cache(maxsize=16)
