@@ -97,8 +97,8 @@ def main():
     # Plans compute these on first use; taken here, the plan times below are
     # those of a planner that has served for a while.
     start = time.perf_counter()
-    planner.local.prepare(DEFAULT_CLEARANCE)
-    print(json.dumps({"stage": "gate distances, every patch (LocalPlanner.prepare)",
+    planner.prepare(DEFAULT_CLEARANCE)
+    print(json.dumps({"stage": "gate distances and node costs, every patch (Planner.prepare)",
                       "seconds": round(time.perf_counter() - start, 2)}))
     rows, signs = _configurations(8 * args.pairs, args.seed)
     by_sign = [[q for q, t in zip(rows, signs) if t == s] for s in (-1.0, 1.0)]

@@ -80,7 +80,7 @@ def main():
 
     roadmap, _ = cached_roadmap(PAPER_GEOMETRY, FULL_BASE_GRID, refinement=FULL_REFINEMENT)
     planner = Planner(roadmap)
-    planner.local.prepare(DEFAULT_CLEARANCE)
+    planner.prepare(DEFAULT_CLEARANCE)
     pairs = same_aspect_pairs(random_full_configurations(rng, 2 * args.pairs))[:args.pairs]
     print(json.dumps({"roadmap": "full 3-DOF", **_check(planner, pairs)}), flush=True)
 

@@ -248,14 +248,19 @@ class LocalPlanner:
             rest[i] = rest[i + 1] + int(np.min(fields[starts[i + 1] + entry]))
         return fields, starts, rest, landmark_start, landmark_goal
 
-    def prepare(self, clearance):
-        """Compute every patch's costs to each of its gates for a clearance
-        now rather than on first use (a few tenths of a second for the
-        paper's roadmap, seconds for the full 3-DOF one)."""
+    def prepare(self, clearance, weights=()):
+        """Compute every patch's costs to each of its gates for a clearance,
+        and its node costs for clearance weights, now rather than on first
+        use (a few tenths of a second for the paper's roadmap, seconds for
+        the full 3-DOF one)."""
         fields, filled = self._fields(float(clearance))
         for k, others in enumerate(self._neighbours):
             for other in others:
                 self._distances_to_gate(fields, filled, k, other, float(clearance))
+        with self._lock:
+            for weight in weights:
+                for k in range(self._pids.size):
+                    self._costed(float(weight), k)
 
     def cells_around(self, point, radius):
         """Cells within ``radius`` grid steps of a point along every axis.

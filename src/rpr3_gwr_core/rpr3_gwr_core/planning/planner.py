@@ -221,6 +221,13 @@ class Planner:
         joints = self._joints[cells]
         self._clear(joints[:1], joints[1:], [patch.id], [0.0])
 
+    def prepare(self, clearance=DEFAULT_CLEARANCE):
+        """Compute now what plans with this clearance otherwise compute on
+        first use: every patch's distances to its gates and its node costs
+        for the clearance weights the planner tries (seconds on the full
+        3-DOF roadmap)."""
+        self.local.prepare(clearance, dict.fromkeys((self.clearance_weight, _DETOUR_WEIGHT)))
+
     def locate(self, configuration, mode_tol=DEFAULT_MODE_TOL):
         """:func:`~rpr3_gwr_core.planning.locate.locate` of a configuration:
         the joints, then the mode coordinate (the 3-RPR's
