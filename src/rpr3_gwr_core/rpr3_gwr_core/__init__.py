@@ -25,19 +25,34 @@ own: its two global paths go through regions 6, 4, 2, 1 and 6, 5, 2, 1.
 True
 """
 
-from .exceptions import (AssemblyModeError, FixedJointMismatchError, GWRError,
-                         InfeasiblePathError, InvalidInputError, NoSolutionError, OutOfGridError,
-                         PlanningTimeoutError, SingularityError, ValidationError)
-from .mechanisms import Geometry, Mechanism, mechanism_from_dict
-from .paper import PAPER_GEOMETRY, PAPER_GRID, rho1_slice
-from .planning import Plan, PlanOptions, Planner, Termination
-from .workspace import Axis, Grid, Roadmap, aspect_groups, build_roadmap, compute_field
+import importlib
 
-__all__ = [
-    "Mechanism", "Geometry", "mechanism_from_dict", "PAPER_GEOMETRY",
-    "Axis", "Grid", "PAPER_GRID", "rho1_slice", "compute_field", "build_roadmap", "Roadmap",
-    "aspect_groups", "Planner", "PlanOptions", "Plan", "Termination",
-    "GWRError", "InvalidInputError", "OutOfGridError", "FixedJointMismatchError",
-    "NoSolutionError", "AssemblyModeError", "SingularityError", "InfeasiblePathError",
-    "ValidationError", "PlanningTimeoutError",
-]
+# Names are loaded on first use (PEP 562), so that ``rpr3-gwr --help`` and
+# light modules such as the exceptions do not load numpy and the compiled
+# kernels with the package.
+_SOURCES = {
+    ".mechanisms": ("Mechanism", "Geometry", "mechanism_from_dict"),
+    ".paper": ("PAPER_GEOMETRY", "PAPER_GRID", "rho1_slice"),
+    ".workspace": ("Axis", "Grid", "compute_field", "build_roadmap", "Roadmap",
+                   "aspect_groups"),
+    ".planning": ("Planner", "PlanOptions", "Plan", "Termination"),
+    ".exceptions": ("GWRError", "InvalidInputError", "OutOfGridError",
+                    "FixedJointMismatchError", "NoSolutionError", "AssemblyModeError",
+                    "SingularityError", "InfeasiblePathError", "ValidationError",
+                    "PlanningTimeoutError"),
+}
+_SOURCE_OF = {name: module for module, names in _SOURCES.items() for name in names}
+
+__all__ = [name for names in _SOURCES.values() for name in names]
+
+
+def __getattr__(name):
+    if name not in _SOURCE_OF:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(_SOURCE_OF[name], __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

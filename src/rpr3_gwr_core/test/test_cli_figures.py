@@ -96,3 +96,16 @@ def test_roadmap_figure_draws_one_label_per_patch(coarse_paper_roadmap):
     figure = figures.roadmap_figure(coarse_paper_roadmap)
     texts = {t.get_text() for t in figure.axes[0].texts}
     assert {str(p) for p in coarse_paper_roadmap.segmentation.patches} <= texts
+
+
+def test_the_help_loads_neither_numpy_nor_the_compiled_kernels():
+    """``rpr3-gwr --help`` answers at once: the commands load the core."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom rpr3_gwr_core.io.cli import main\n"
+            "try:\n    main(['--help'])\nexcept SystemExit:\n    pass\n"
+            "print(sorted({'numpy', 'numba'} & set(sys.modules)))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert out.strip().splitlines()[-1] == "[]"

@@ -67,6 +67,7 @@ import numpy as np
 from ..exceptions import InvalidInputError
 from ..workspace import build_roadmap, refine
 from .export import FIELD_TYPES, FORMAT, VERSION, roadmap_arrays, roadmap_from_arrays
+from .paths import default_cache_dir
 
 __all__ = ["CacheWarning", "DEFAULT_MAX_BYTES", "STALE_STAGING_SECONDS", "default_cache_dir",
            "default_max_bytes", "cache_key", "cached_roadmap"]
@@ -92,14 +93,6 @@ _STAGING_NAME = re.compile(r"[0-9a-f]{24}\..+\.tmp")
 
 class CacheWarning(UserWarning):
     """A cache entry was damaged and rebuilt, or the cache cannot be written."""
-
-
-def default_cache_dir():
-    """``$RPR3_GWR_CACHE``, else ``$XDG_CACHE_HOME/rpr3-gwr``, else ``~/.cache/rpr3-gwr``."""
-    if os.environ.get("RPR3_GWR_CACHE"):
-        return os.environ["RPR3_GWR_CACHE"]
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return os.path.join(base, "rpr3-gwr")
 
 
 def default_max_bytes():

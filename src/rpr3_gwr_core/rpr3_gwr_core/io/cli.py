@@ -34,19 +34,9 @@ import json
 import math
 import os
 import sys
-import time
 
-import numpy as np
-
-from ..exceptions import GWRError, InvalidInputError
-from ..mechanisms import mechanism_from_dict
-from ..mechanisms.rpr3 import aspect, direct_kinematics
-from ..paper import FULL_BASE_GRID, FULL_REFINEMENT, PAPER_GEOMETRY, rho1_slice
-from ..planning import NEVER, PlanOptions, Planner, Termination
-from ..workspace import Grid, build_roadmap
-from ..workspace.cusps import cusp_curves, find_cusps
-from ..workspace.grid import check_roadmap_grid
-from .cache import cached_roadmap, default_cache_dir
+from ..exceptions import GWRError
+from .paths import default_cache_dir
 
 __all__ = ["main"]
 
@@ -54,7 +44,7 @@ __all__ = ["main"]
 # squared legs against the geometry's tens of units, so the leg residual of
 # its solutions grows with them (3e-7 at 1e6, 4e-3 at 1e10) until its
 # polynomial overflows near 1e77.
-_MAX_LEG = 1e6
+MAX_LEG = 1e6
 
 
 class _Parser(argparse.ArgumentParser):
@@ -74,9 +64,9 @@ def _finite(text):
 
 def _leg(text):
     value = _finite(text)
-    if value > _MAX_LEG:
+    if value > MAX_LEG:
         raise argparse.ArgumentTypeError(f"{text!r} is out of range: legs are at most "
-                                         f"{_MAX_LEG:g} length units")
+                                         f"{MAX_LEG:g} length units")
     return value
 
 
@@ -164,192 +154,16 @@ def _parser():
     return parser
 
 
-class _Progress:
-    """Shows stages on a terminal once a build has taken more than a second."""
-
-    def __init__(self, stream):
-        self.stream = stream
-        self.start = time.perf_counter()
-        self.enabled = stream.isatty()
-
-    def __call__(self, stage, fraction):
-        elapsed = time.perf_counter() - self.start
-        if self.enabled and elapsed > 1.0:
-            end = "\n" if fraction >= 1.0 else ""
-            self.stream.write(f"\r\x1b[K[{fraction:4.0%}] {stage} ({elapsed:.1f} s)" + end)
-            self.stream.flush()
-
-
-def _cusps(args):
-    if args.trace:
-        low, high, step = args.trace
-        if not (0 < low <= high <= _MAX_LEG and step > 0) or (high - low) / step > 1000:
-            raise InvalidInputError(f"--trace takes 0 < MIN <= MAX <= {_MAX_LEG:g} and a STEP "
-                                    "giving at most 1000 slices")
-        values = low + step * np.arange(int(math.floor((high - low) / step + 1e-9)) + 1)
-        slices = [build_roadmap(PAPER_GEOMETRY, rho1_slice(float(v), step=args.step))
-                  for v in values]
-        return {"curves": [[c.to_dict(PAPER_GEOMETRY) for c in curve]
-                           for curve in cusp_curves(slices)]}
-    roadmap, _ = cached_roadmap(PAPER_GEOMETRY, rho1_slice(args.rho1), args.cache_dir,
-                                _Progress(sys.stderr))
-    return [c.to_dict(PAPER_GEOMETRY) for c in find_cusps(roadmap)]
-
-
-def _dk(args):
-    poses = direct_kinematics(np.array([args.rho1, args.rho2, args.rho3]), PAPER_GEOMETRY)
-    signs = aspect(poses, PAPER_GEOMETRY) if len(poses) else []
-    return [{"x": float(p[0]), "y": float(p[1]), "alpha": float(p[2]), "aspect": int(s)}
-            for p, s in zip(poses, signs)]
-
-
-def _full_roadmap(cache_dir):
-    return cached_roadmap(PAPER_GEOMETRY, FULL_BASE_GRID, cache_dir, _Progress(sys.stderr),
-                          refinement=FULL_REFINEMENT)
-
-
-def _roadmap(args):
-    from .export import roadmap_summary, roadmap_to_gexf, roadmap_to_json
-
-    start = time.perf_counter()
-    if args.full:
-        if args.field_figure:
-            raise InvalidInputError("--field-figure draws 2-D grids: with --full use "
-                                    "--slice-figure")
-        roadmap, hit = _full_roadmap(args.cache_dir)
-    else:
-        if args.slice_figure:
-            raise InvalidInputError("--slice-figure needs --full")
-        grid = rho1_slice(args.rho1, tuple(args.rho2), tuple(args.rho3), args.step)
-        check_roadmap_grid(PAPER_GEOMETRY, grid)
-        roadmap, hit = build_roadmap(PAPER_GEOMETRY, grid, method=args.method,
-                                     progress=_Progress(sys.stderr)), False
-    summary = roadmap_summary(roadmap)
-    summary["timings"] = dict(roadmap.timings, total=time.perf_counter() - start)
-    summary["from_cache"] = hit
-    if args.slice_figure:
-        from .figures import slice_figure
-
-        cusps = find_cusps(build_roadmap(PAPER_GEOMETRY, rho1_slice(args.slice_rho1, step=0.25)))
-        _save(args.slice_figure, slice_figure(roadmap, {0: args.slice_rho1}, cusps))
-    if args.output:
-        _save(args.output, roadmap_to_json(roadmap))
-    if args.gexf:
-        _save(args.gexf, roadmap_to_gexf(roadmap))
-    if args.field_figure or args.roadmap_figure:
-        from .figures import field_figure, roadmap_figure
-
-        if args.field_figure:
-            _save(args.field_figure, field_figure(roadmap))
-        if args.roadmap_figure:
-            _save(args.roadmap_figure, roadmap_figure(roadmap))
-    return summary
-
-
-def _save(path, content, dpi=120):
-    """Writes text or a figure to ``path``; an OS error names the file (a
-    failed write or close carries no file name)."""
-    try:
-        if isinstance(content, str):
-            with open(path, "w", encoding="utf-8") as out:
-                out.write(content)
-        else:
-            content.savefig(path, dpi=dpi)
-    except OSError as exc:
-        raise OSError(exc.errno, exc.strerror or str(exc), exc.filename or path) from None
-
-
-def _plan(args):
-    given = 4 if args.full else 3
-    for name in ("start", "goal"):
-        if len(getattr(args, name)) != given:
-            raise InvalidInputError(
-                f"--{name} takes {'RHO1 ' if args.full else ''}RHO2 RHO3 ALPHA_DEG"
-                f"{'' if args.full else ' (rho1 is --rho1; --full plans with rho1 free)'}")
-    options = PlanOptions(smooth=args.smooth, weighted=args.weighted,
-                          feasibility_only=args.feasibility_only,
-                          max_velocity=args.max_velocity, max_acceleration=args.max_acceleration,
-                          mode_tol=math.radians(args.alpha_tol_deg))
-    if args.full:
-        roadmap, _ = _full_roadmap(args.cache_dir)
-        start, goal = tuple(args.start), tuple(args.goal)
-        roadmap_doc = {"mechanism": PAPER_GEOMETRY.to_dict(), "full": True}
-    else:
-        grid = rho1_slice(args.rho1)
-        roadmap, _ = cached_roadmap(PAPER_GEOMETRY, grid, args.cache_dir, _Progress(sys.stderr))
-        start, goal = (args.rho1, *args.start), (args.rho1, *args.goal)
-        roadmap_doc = {"mechanism": PAPER_GEOMETRY.to_dict(), "grid": grid.to_dict()}
-    start = (*start[:3], math.radians(start[3]))
-    goal = (*goal[:3], math.radians(goal[3]))
-    header = {"roadmap": roadmap_doc, "request": {"start": list(start), "goal": list(goal)}}
-    begin = time.perf_counter()
-    try:
-        planner = Planner(roadmap)
-        termination = NEVER if args.time_limit is None else Termination.after(args.time_limit)
-        result = dict(header, **planner.plan(start, goal, options, termination).to_dict())
-        code = 0
-    except GWRError as exc:
-        result = dict(header, feasible=False, reason=getattr(exc, "reason", exc.code.lower()),
-                      error={"code": exc.code, "message": str(exc)})
-        code = 1
-    result["plan_time_s"] = time.perf_counter() - begin
-    if args.output:
-        _save(args.output, json.dumps(result))
-    return result, code
-
-
-def _read_plan(path):
-    """The mechanism, grid and plan of a file written by ``plan``; what a
-    figure reads of the plan is checked (else ``InvalidInputError``)."""
-    try:
-        with open(path, encoding="utf-8") as stream:
-            plan = json.load(stream)
-        if plan["roadmap"].get("full"):
-            raise InvalidInputError(f"{path} is a --full plan: 'plot' draws plans at fixed "
-                                    "rho1 (the waypoints are in the JSON)")
-        mechanism = mechanism_from_dict(plan["roadmap"]["mechanism"])
-        grid = Grid.from_dict(plan["roadmap"]["grid"])
-        if "error" in plan or not plan.get("waypoints"):
-            raise InvalidInputError(f"{path} holds no trajectory to draw")
-        for name, size in (("joints", mechanism.n_joints), ("pose", mechanism.pose_size)):
-            values = np.array([w[name] for w in plan["waypoints"]], dtype=float)
-            if values.shape[1:] != (size,) or not np.all(np.isfinite(values)):
-                raise ValueError(f"the waypoints' {name} are not {size} finite numbers each")
-        paths = plan.get("global_paths") or [[]]
-        if not all(isinstance(p, int) for p in paths[max(plan.get("path_index", 0), 0)]):
-            raise ValueError("its global path is not a list of patch ids")
-    except InvalidInputError:
-        raise
-    # ValueError: also a file that is not UTF-8 or not JSON.
-    except (KeyError, TypeError, AttributeError, ValueError, IndexError) as exc:
-        raise InvalidInputError(f"{path} is not a plan written by 'rpr3-gwr plan' "
-                                f"({exc})") from None
-    if max([a.high for a in grid.axes] + [v for _, v in grid.fixed]) > _MAX_LEG:
-        raise InvalidInputError(f"the grid of {path} is out of range: legs are at most "
-                                f"{_MAX_LEG:g} length units")
-    return mechanism, grid, plan
-
-
-def _plot(args):
-    from .figures import plan_figure
-
-    mechanism, grid, plan = _read_plan(args.plan_file)
-    check_roadmap_grid(mechanism, grid)
-    roadmap, _ = cached_roadmap(mechanism, grid, args.cache_dir, _Progress(sys.stderr))
-    output = args.output or os.path.splitext(args.plan_file)[0] + ".png"
-    _save(output, plan_figure(roadmap, plan), dpi=110)
-    return {"figure": output}, 0
-
-
 def main(argv=None):
     """Entry point of ``rpr3-gwr``; returns the process exit code."""
     parser = _parser()
     args = parser.parse_args(argv)
-    commands = {"dk": lambda a: (_dk(a), 0), "roadmap": lambda a: (_roadmap(a), 0),
-                "cusps": lambda a: (_cusps(a), 0),
-                "plan": _plan, "plot": _plot}
+    # Imported once the arguments are read: the commands load numpy and the
+    # compiled kernels, which ``--help`` and a bad argument need not wait for.
+    from . import commands
+
     try:
-        result, code = commands[args.command](args)
+        result, code = commands.run(args)
     except GWRError as exc:
         parser.exit(2, f"{parser.prog}: error: {exc}\n")
     except OSError as exc:
