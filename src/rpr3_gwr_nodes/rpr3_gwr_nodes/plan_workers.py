@@ -17,9 +17,22 @@ using the planner in the node's threads meanwhile.  Workers never touch ROS.
 They ignore SIGINT (the node stops them once its requests are answered) and
 end when they find the node's process gone (killed, without a shutdown), so
 they do not outlive it holding the roadmap's memory.
+
+Each worker has a pipe of its own and is handed one request at a time: with
+a task queue shared by all of them, a worker stopped (SIGSTOP, a debugger)
+while reading it kept the queue's lock and stalled every other worker.  A
+worker is hung when its heartbeat, stamped by a thread of its own, is
+older than a few seconds: a stopped or dead process's threads stamp
+nothing, while a busy worker's thread goes on stamping however long its plan
+takes (the compiled searches release the interpreter's lock), so a long plan
+is not taken for a hang.  A hung worker is killed (SIGKILL ends a stopped
+process too), its request is given back to the caller to plan, and the
+other workers go on.  It is not replaced: what made it fail (a signal, a
+lack of memory, a bug) may fail a new one as well; the next roadmap forks a
+full set.
 """
 
-import concurrent.futures
+import collections
 import multiprocessing
 import os
 import signal
@@ -27,16 +40,24 @@ import threading
 import time
 import warnings
 
-__all__ = ["PlanWorkers", "WorkersClosed"]
+__all__ = ["PlanWorkers", "WorkerFailed", "WorkersClosed"]
 
-# How often a worker looks for its node's process [s].
-_WATCH_PERIOD = 1.0
-# The planner a worker serves, set once when it starts.
-_planner = None
+# How often a worker stamps its heartbeat, and looks for its node's process
+# [s]; how often a caller looks at the heartbeat of the worker it waits for.
+_BEAT_PERIOD = 0.1
+# Age of the last heartbeat that makes a worker hung [s]: many periods, as
+# a loaded machine may not run the heartbeat's thread for a while.
+_HANG_AFTER = 2.0
 
 
 class WorkersClosed(Exception):
-    """The workers were closed (a newer roadmap replaced their planner)."""
+    """The workers were closed (a newer roadmap replaced their planner, or
+    every worker failed)."""
+
+
+class WorkerFailed(Exception):
+    """The worker planning a request hung or died: it was killed, and the
+    request was not planned."""
 
 
 class PlanWorkers:
@@ -49,71 +70,149 @@ class PlanWorkers:
     count : int
         Number of worker processes, 1 at least.
     timeout : float
-        Longest wait for a plan [s].
+        Longest wait for a plan from a worker that keeps its heartbeat [s].
     """
 
     def __init__(self, planner, count, timeout):
         self.timeout = timeout
-        self._pool = concurrent.futures.ProcessPoolExecutor(
-            count, mp_context=multiprocessing.get_context("fork"), initializer=_adopt,
-            initargs=(planner, os.getpid()))
-        with warnings.catch_warnings():
-            # Python 3.12 warns of any fork from a threaded process: the
-            # module doc says why this one is safe.
-            warnings.simplefilter("ignore", DeprecationWarning)
-            # The first submission forks every worker, from this thread.
-            started = [self._pool.submit(_started) for _ in range(count)]
+        self._changed = threading.Condition()
+        self._idle = collections.deque()
+        self._closed = False
+        context = multiprocessing.get_context("fork")
         try:
-            for future in started:
-                future.result(timeout)
+            with warnings.catch_warnings():
+                # Python 3.12 warns of any fork from a threaded process: the
+                # module doc says why this one is safe.
+                warnings.simplefilter("ignore", DeprecationWarning)
+                for _ in range(count):
+                    self._idle.append(_Worker(context, planner))
         except BaseException:
-            self._pool.shutdown(wait=False, cancel_futures=True)
+            self.close()
             raise
+        self._count = count
+
+    @property
+    def count(self):
+        """Workers not killed."""
+        return self._count
 
     def plan(self, start, goal, options):
-        """``Planner.plan`` in a worker.
+        """``Planner.plan`` in an idle worker, once there is one.
 
         Raises
         ------
         GWRError
             What the planner raises.
         WorkersClosed
-            After :meth:`close`.
-        concurrent.futures.process.BrokenProcessPool, TimeoutError
-            When a worker died, or gave no plan within ``timeout``.
+            After :meth:`close`, or once every worker failed.
+        WorkerFailed
+            When the worker hung, died, or gave no plan within ``timeout``.
         """
+        worker = self._take()
         try:
-            future = self._pool.submit(_plan, start, goal, options)
-        except RuntimeError as exc:
-            if isinstance(exc, concurrent.futures.BrokenExecutor):
+            worker.conn.send((start, goal, options))
+            planned, answer = worker.receive(self.timeout)
+        except (OSError, EOFError, WorkerFailed) as exc:
+            self._retire(worker)
+            if isinstance(exc, WorkerFailed):
                 raise
-            raise WorkersClosed("the plan workers are closed") from exc
-        return future.result(self.timeout)
+            raise WorkerFailed(f"plan worker {worker.pid} died") from exc
+        self._give_back(worker)
+        if planned:
+            return answer
+        try:
+            raise answer
+        finally:
+            # The error's traceback holds this frame: without this frame's
+            # reference to the error, no cycle keeps the request's planner
+            # state alive until a full collection.
+            del answer
 
     def close(self):
         """Stop the workers once the plans asked of them are done; returns at once."""
-        self._pool.shutdown(wait=False)
+        with self._changed:
+            self._closed = True
+            idle, self._idle = list(self._idle), collections.deque()
+            self._changed.notify_all()
+        for worker in idle:
+            worker.kill()
+
+    def _take(self):
+        with self._changed:
+            while not self._idle:
+                if self._closed:
+                    raise WorkersClosed("the plan workers are closed")
+                self._changed.wait()
+            return self._idle.popleft()
+
+    def _give_back(self, worker):
+        with self._changed:
+            if not self._closed:
+                self._idle.append(worker)
+                self._changed.notify()
+                return
+        worker.kill()
+
+    def _retire(self, worker):
+        worker.kill()
+        with self._changed:
+            self._count -= 1
+            if not self._count:
+                self._closed = True
+            self._changed.notify_all()
 
 
-def _adopt(planner, node_process):
-    global _planner
-    _planner = planner
+class _Worker:
+    """A worker process, the node's end of its pipe and its heartbeat."""
+
+    def __init__(self, context, planner):
+        # A time.monotonic() stamp in memory shared with the worker.
+        self.beat = context.RawValue("d", time.monotonic())
+        self.conn, child = context.Pipe()
+        self.process = context.Process(target=_serve, daemon=True,
+                                       args=(planner, child, self.beat, os.getpid()))
+        self.process.start()
+        self.pid = self.process.pid
+        child.close()
+
+    def receive(self, timeout):
+        """The worker's answer: ``(True, plan)`` or ``(False, exception)``."""
+        deadline = time.monotonic() + timeout
+        while not self.conn.poll(_BEAT_PERIOD):
+            silent = time.monotonic() - self.beat.value
+            if silent > _HANG_AFTER:
+                raise WorkerFailed(f"plan worker {self.pid} hung (stopped or dead): no "
+                                   f"heartbeat for {silent:.1f} s")
+            if time.monotonic() > deadline:
+                raise WorkerFailed(f"plan worker {self.pid} gave no plan within {timeout:g} s")
+        return self.conn.recv()
+
+    def kill(self):
+        self.process.kill()
+        self.process.join()
+        self.conn.close()
+
+
+def _serve(planner, conn, beat, node_process):
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    threading.Thread(target=_watch, args=(node_process,), daemon=True).start()
+    threading.Thread(target=_beat, args=(beat, node_process), daemon=True).start()
+    while True:
+        try:
+            start, goal, options = conn.recv()
+        except EOFError:
+            return
+        try:
+            answer = True, planner.plan(start, goal, options)
+        except Exception as exc:  # the caller raises it
+            answer = False, exc
+        conn.send(answer)
 
 
-def _watch(node_process):
-    # An orphan's parent is another process; its queues would never close,
-    # as the workers hold their ends too.
+def _beat(beat, node_process):
+    # An orphan's parent is another process; its pipe would never close,
+    # as the other workers may hold copies of its end.
     while os.getppid() == node_process:
-        time.sleep(_WATCH_PERIOD)
+        beat.value = time.monotonic()
+        time.sleep(_BEAT_PERIOD)
     os._exit(0)
-
-
-def _started():
-    return True
-
-
-def _plan(start, goal, options):
-    return _planner.plan(start, goal, options)

@@ -3,14 +3,19 @@
 Subscribes to ``field`` and ``roadmap`` (reliable, transient local) and builds
 its planning state from them, computing nothing that the builder computed: a
 roadmap from another builder or from a bag serves as well.  A new pair of
-messages replaces the state atomically; requests in flight finish on the
-state they started with.
+messages replaces the state atomically once the new planner is warmed up
+(every compiled kernel a plan uses loaded, or compiled on a first run);
+requests in flight finish on the state they started with.  Until the first
+roadmap is warmed up, requests are answered ``ERROR_NO_ROADMAP``: a client
+knows the planner is ready when a request gets another answer (the node logs
+"planning on a new roadmap" then).
 
 Serves ``plan_path`` (rpr3_gwr_msgs/PlanPath) from a reentrant callback group
 on a multithreaded executor, so several requests run at once, each planned
 in one of ``plan_workers`` processes forked with the planner once it is
 ready (:mod:`.plan_workers`; in the node's own process until then, with
-``plan_workers`` 0, and for good when a worker dies or hangs).  Every step of a
+``plan_workers`` 0, when a worker dies or hangs for the request it had, and
+for good once every worker did).  Every step of a
 request, the conversion of the answer to messages included, runs inside the
 error mapping: an error of the core becomes the response's error code and
 message, anything else ``ERROR_INTERNAL``, and the node never dies on a
@@ -21,12 +26,12 @@ rho1).  Each planned trajectory is also published on ``planned_trajectory``
 track in ``base``, the leg path in ``joint_space``).
 """
 
-from concurrent.futures.process import BrokenProcessPool
 import math
 import os
 import threading
 import time
 
+from numba.core import event as numba_event
 import numpy as np
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
@@ -41,7 +46,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from visualization_msgs.msg import MarkerArray
 
 from .conversions import MAX_DURATION, duration_msg, roadmap_from_msgs
-from .plan_workers import PlanWorkers, WorkersClosed
+from .plan_workers import PlanWorkers, WorkerFailed, WorkersClosed
 from .profiles import BASE_FRAME, JOINT_NAMES, LATCHED_QOS, SERVICE_QOS
 from .spin import run
 from .visualization import path_markers
@@ -96,8 +101,8 @@ def plan_to_trajectory(plan, header):
 
 # Cores of the machine: one plan worker each by default, two executor threads.
 _CORES = os.cpu_count() or 1
-# Longest wait for a worker's plan [s]: the full 3-DOF roadmap's slowest
-# plans take seconds.
+# Longest wait for a plan from a worker that is not hung [s]: the full 3-DOF
+# roadmap's slowest plans take seconds.
 _WORKER_TIMEOUT = 120.0
 
 
@@ -165,15 +170,26 @@ class PlannerNode(Node):
         if field is None or roadmap is None or field.header.stamp != roadmap.header.stamp:
             return
         start = time.perf_counter()
-        try:
-            planner = Planner(roadmap_from_msgs(field, roadmap))
-        except GWRError as exc:
-            self.get_logger().error(f"ignoring an inconsistent roadmap: {exc}")
-            return
+        # A cold numba cache (a first run, or a changed core) turns loading
+        # the kernels into seconds of compiling: say so, or the wait for
+        # readiness looks like a hang.
+        with numba_event.install_listener("numba:compile", _CompileNotice(self.get_logger())):
+            try:
+                planner = Planner(roadmap_from_msgs(field, roadmap))
+            except GWRError as exc:
+                self.get_logger().error(f"ignoring an inconsistent roadmap: {exc}")
+                return
+            self._messages.clear()
+            try:
+                planner.warm_up()
+                warm = True
+            except Exception as exc:  # a bug there must not take the node down
+                self.get_logger().error(f"the warm-up failed, planning in the node's process: "
+                                        f"{exc!r}")
+                warm = False
         # One reference assignment: atomic for the service threads, and a
         # request keeps the state it started with.
         previous, self._state = self._state, _State(planner, roadmap.header.stamp)
-        self._messages.clear()
         stamp = roadmap.header.stamp
         self.get_logger().info(
             f"planning on a new roadmap (stamp {stamp.sec}.{stamp.nanosec:09d}): "
@@ -182,14 +198,9 @@ class PlannerNode(Node):
         self.ready.set()
         if previous is not None and previous.workers is not None:
             previous.workers.close()
-        try:
-            planner.warm_up()
-        except Exception as exc:  # a bug there must not take the node down
-            # Nor fork workers that might need numba's compiler lock.
-            self.get_logger().error(f"the warm-up failed, planning in the node's process: "
-                                    f"{exc!r}")
-            return
-        self._start_workers(planner, roadmap.header.stamp)
+        # Without a warm-up, forked workers might need numba's compiler lock.
+        if warm:
+            self._start_workers(planner, stamp)
 
     def _start_workers(self, planner, stamp):
         """Fork the workers of a planner now in use, which then take its requests."""
@@ -198,8 +209,9 @@ class PlannerNode(Node):
             return
         begin = time.perf_counter()
         try:
-            # Computed once here, the gate distances are shared with the workers.
-            planner.local.prepare(self.get_parameter("clearance").value)
+            # Computed once here, the gate distances and node costs are shared
+            # with the workers.
+            planner.prepare(self.get_parameter("clearance").value)
             workers = PlanWorkers(planner, count, _WORKER_TIMEOUT)
         except Exception as exc:  # plans go on in this process
             self.get_logger().error(f"no plan workers, planning in the node's process: {exc!r}")
@@ -211,18 +223,22 @@ class PlannerNode(Node):
 
     def _plan(self, state, start, goal, options):
         """A plan from the state's workers, or from its planner here when it
-        has none or they failed (then for good: they might fail again)."""
+        has none or the worker planning it failed (killed, not replaced: it
+        might fail again)."""
         workers = state.workers
         if workers is not None:
             try:
                 return workers.plan(start, goal, options)
             except WorkersClosed:
-                pass  # a newer roadmap came while this request started on the old one
-            except (BrokenProcessPool, TimeoutError) as exc:
-                state.workers = None
-                workers.close()
-                self.get_logger().error(f"a plan worker failed ({exc!r}): planning in the "
-                                        "node's process until the next roadmap")
+                pass  # a newer roadmap came meanwhile, or every worker failed
+            except WorkerFailed as exc:
+                left = workers.count
+                if not left:
+                    state.workers = None
+                self.get_logger().error(
+                    f"{exc}; killed, its request plans in the node's process" + (
+                        f", {left} worker(s) go on" if left else
+                        ", and so does every request until the next roadmap"))
         return state.planner.plan(start, goal, options)
 
     def destroy_node(self):
@@ -289,6 +305,24 @@ class PlannerNode(Node):
 
     def _header(self):
         return Header(stamp=self.get_clock().now().to_msg(), frame_id=BASE_FRAME)
+
+
+class _CompileNotice(numba_event.Listener):
+    """Logs the first compilation numba starts."""
+
+    def __init__(self, logger):
+        self._logger = logger
+        self._said = False
+
+    def on_start(self, event):
+        if not self._said:
+            self._said = True
+            # 9 s on a quiet 2-core machine, 14 s on a busy one.
+            self._logger.info("compiling the planner's kernels (a first run, or the core "
+                              "changed): 10 to 20 s, then they are cached")
+
+    def on_end(self, event):
+        pass
 
 
 def _named(state):

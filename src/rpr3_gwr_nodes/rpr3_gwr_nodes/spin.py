@@ -4,12 +4,14 @@ Ctrl-C or an external shutdown, then always destroy the node and shut down.
 One difference: rclpy's own SIGINT and SIGTERM handlers shut the context
 down at once, so a service callback still computing could no longer send its
 answer (rclpy then logs "exception was never retrieved").  Here a signal only
-stops the spinning; callbacks in flight finish and answer, then the node is
-destroyed and the context shut down.
+stops the spinning; callbacks in flight finish and answer, the requests still
+waiting in the node's services are answered too, then the node is destroyed
+and the context shut down.
 """
 
 import signal
 import threading
+import time
 
 import rclpy
 from rclpy.executors import ExternalShutdownException
@@ -19,6 +21,12 @@ from rclpy.task import Future
 __all__ = ["run"]
 
 _STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+# Longest delay from a stop signal to its handler [s].
+_SIGNAL_PERIOD = 0.1
+# How long requests sent just before the signal may take to reach the node's
+# services, and how often they are looked for meanwhile [s].
+_DRAIN_GRACE = 0.2
+_DRAIN_PERIOD = 0.01
 
 
 def run(node_type, executor_type, args=None, **executor_options):
@@ -42,8 +50,11 @@ def run(node_type, executor_type, args=None, **executor_options):
         spinner = threading.Thread(target=_spin, args=(executor, stopped, stop), name="spin")
         spinner.start()
         # Signal handlers run in the main thread, and only while it runs
-        # Python: it waits here, not in rclpy's wait set.
-        stop.wait()
+        # Python: it waits here, not in rclpy's wait set.  The kernel may
+        # hand the signal to another thread (one of DDS's), which does not
+        # interrupt this wait: it wakes up now and then to run the handler.
+        while not stop.wait(_SIGNAL_PERIOD):
+            pass
     except KeyboardInterrupt:
         pass
     finally:
@@ -57,6 +68,7 @@ def run(node_type, executor_type, args=None, **executor_options):
             # Callbacks still running use the executor's guard condition,
             # which its shutdown destroys: they finish first.
             _wait_for_callbacks(executor)
+            _answer_waiting_requests(node)
             executor.shutdown()
         if node is not None:
             node.destroy_node()
@@ -85,3 +97,29 @@ def _wait_for_callbacks(executor):
     pool = getattr(executor, "_executor", None)
     if pool is not None:
         pool.shutdown(wait=True)
+
+
+def _answer_waiting_requests(node):
+    """Answer, in this thread, the requests waiting in the node's services.
+
+    The executor takes one request of a service per callback it starts, so
+    when the spinning stops, requests that arrived together (a burst of
+    clients) may still wait in the service's reader, and would die with the
+    node unanswered whatever the signal.  The take is the executor's own
+    (``Executor._take_service``).  The suite's service callbacks are plain
+    functions.
+    """
+    deadline = time.monotonic() + _DRAIN_GRACE
+    while True:
+        answered = False
+        for service in node.services:
+            with service.handle:
+                request, header = service.handle.service_take_request(service.srv_type.Request)
+            if header is not None:
+                service.send_response(service.callback(request, service.srv_type.Response()),
+                                      header)
+                answered = True
+        if not answered:
+            if time.monotonic() >= deadline:
+                return
+            time.sleep(_DRAIN_PERIOD)
