@@ -73,3 +73,20 @@ def test_the_cli_answers_a_passed_time_limit_with_a_timeout_error(capsys):
     assert main(["plan", "--start", "12", "18", "122.82", "--goal", "10", "25", "-24.24",
                  "--time-limit", "0"]) == 1
     assert '"code": "TIMEOUT"' in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("bad", [{"global_paths": 0}, {"repairs": -1}, {"split_shortcuts": 1.5},
+                                 {"detour_weight": math.nan}, {"repairs": True}])
+def test_retries_refuse_what_cannot_be_counted(bad):
+    from rpr3_gwr_core.planning import Retries
+
+    with pytest.raises(InvalidInputError):
+        Retries(**bad)
+
+
+def test_a_planner_that_does_not_retry_still_plans_the_papers_examples(paper_roadmap):
+    from rpr3_gwr_core.planning import Retries
+
+    planner = Planner(paper_roadmap, retries=Retries(global_paths=1, repairs=0,
+                                                    split_shortcuts=0, detour_weight=0.0))
+    assert planner.plan(Q1, Q2, PlanOptions(smooth=True)).validation.ok

@@ -14,6 +14,7 @@ error when none passes.
 from dataclasses import dataclass, field as dataclass_field
 import itertools
 import math
+import numbers
 
 import numpy as np
 
@@ -27,26 +28,56 @@ from .termination import NEVER
 from .trajectory import corner_cuts, cut_corners, time_parameterize
 from .validation import DEFAULT_MAX_STEP, DEFAULT_MIN_MARGIN, validate_path
 
-__all__ = ["PlanOptions", "Plan", "Planner"]
+__all__ = ["PlanOptions", "Plan", "Planner", "Retries"]
 
 # Margin [normalised |det Jx|] that paths keep from the singular locus
 # wherever the roadmap allows.
 DEFAULT_CLEARANCE = 2e-2
 # Shortcuts are checked at this many points per grid step.
 _SAMPLES_PER_CELL = 5
-# Local re-plans around steps the validator refused, per global path and weight.
-_REPAIRS = 4
-# Shortcuts the validator refused that are split into shorter ones, one by
-# one, before the whole cell path is restored.
-_RESTORED_SHORTCUTS = 6
-# The paper's clearance weight (1 + w / d per cell), for paths that keep to
-# the middle of their patches when the shortest ones cannot be repaired.
-_DETOUR_WEIGHT = 10.0
 # A followed pose this far from its waypoint's solution [scale] is on another sheet.
 _STRAYED = 1e-4
-# Global paths tried, the listed ones included, before a plan fails: when
-# every shortest path fails locally, longer ones may still pass.
-_MAX_GLOBAL_ATTEMPTS = 16
+
+
+@dataclass(frozen=True)
+class Retries:
+    """How hard a plan tries before it fails, and so how long the worst
+    plans take (a deadline, :class:`~.termination.Termination`, bounds
+    them in time as well).
+
+    Attributes
+    ----------
+    global_paths : int
+        Global paths tried, the listed ones first, before a plan fails: when
+        every shortest path fails locally, longer ones may still pass.
+    repairs : int
+        Local re-plans around a step the validator refused, per global path
+        and clearance weight.
+    split_shortcuts : int
+        Shortcuts the validator refused that are split into shorter ones, one
+        by one, before the whole cell path is restored (also corners put back
+        when smoothing).
+    detour_weight : float
+        The paper's clearance weight ``w`` (cell cost ``1 + w / d``) of the
+        paths tried when the shortest ones cannot be repaired: they keep to
+        the middle of their patches.
+    """
+
+    global_paths: int = 16
+    repairs: int = 4
+    split_shortcuts: int = 6
+    detour_weight: float = 10.0
+
+    def __post_init__(self):
+        for name in ("global_paths", "repairs", "split_shortcuts"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, numbers.Integral) \
+                    or value < (1 if name == "global_paths" else 0):
+                raise InvalidInputError(f"{name} must be a whole number of at least "
+                                        f"{1 if name == 'global_paths' else 0}, got {value!r}")
+        if not (math.isfinite(self.detour_weight) and self.detour_weight >= 0):
+            raise InvalidInputError(f"detour_weight must be finite and non-negative, got "
+                                    f"{self.detour_weight!r}")
 
 
 @dataclass(frozen=True)
@@ -179,11 +210,14 @@ class Planner:
         Smallest normalised |det Jx| accepted at start, goal and along a plan.
     max_step : float
         Validator's continuation step [length unit].
+    retries : Retries
+        How hard a plan tries before it fails.
     """
 
     def __init__(self, roadmap, clearance_weight=DEFAULT_CLEARANCE_WEIGHT,
-                 min_margin=DEFAULT_MIN_MARGIN, max_step=DEFAULT_MAX_STEP):
+                 min_margin=DEFAULT_MIN_MARGIN, max_step=DEFAULT_MAX_STEP, retries=Retries()):
         self.roadmap = roadmap
+        self.retries = retries
         if not (math.isfinite(clearance_weight) and clearance_weight >= 0):
             raise InvalidInputError("clearance_weight must be finite and non-negative")
         self.index = RoadmapIndex(roadmap)
@@ -226,7 +260,7 @@ class Planner:
         first use: every patch's distances to its gates and its node costs
         for the clearance weights the planner tries (seconds on the full
         3-DOF roadmap)."""
-        self.local.prepare(clearance, dict.fromkeys((self.clearance_weight, _DETOUR_WEIGHT)))
+        self.local.prepare(clearance, self._weights())
 
     def locate(self, configuration, mode_tol=DEFAULT_MODE_TOL):
         """:func:`~rpr3_gwr_core.planning.locate.locate` of a configuration:
@@ -311,15 +345,20 @@ class Planner:
                         smoothed=smoothed)
         raise ValidationError("no global path gave a valid trajectory: " + "; ".join(failures))
 
+    def _weights(self):
+        """The clearance weights a global path's local path is tried with."""
+        return dict.fromkeys((self.clearance_weight, self.retries.detour_weight))
+
     def _attempts(self, paths, start_patch, goal_patch):
-        """The listed global paths, then longer ones, ``_MAX_GLOBAL_ATTEMPTS`` in all;
+        """The listed global paths, then longer ones, ``retries.global_paths`` in all;
         a longer path that is tried is appended to ``paths`` so a plan can
         point at it."""
-        yield from paths[:_MAX_GLOBAL_ATTEMPTS]
+        most = self.retries.global_paths
+        yield from paths[:most]
         listed = {p.patches for p in paths}
         extra = (p for p in longer_paths(self.index, start_patch, goal_patch)
                  if p.patches not in listed)
-        for path in itertools.islice(extra, max(0, _MAX_GLOBAL_ATTEMPTS - len(paths))):
+        for path in itertools.islice(extra, max(0, most - len(paths))):
             paths.append(path)
             yield path
 
@@ -328,7 +367,7 @@ class Planner:
         where the shortcut path passes too; when every repair of the
         shortest path fails, the same for the path the paper's clearance
         weight keeps in the middle of its patches."""
-        for weight in dict.fromkeys((self.clearance_weight, _DETOUR_WEIGHT)):
+        for weight in self._weights():
             result, joints, patches = self._repaired_path(path, s, g, clearance, weight,
                                                           termination)
             if result.ok:
@@ -351,7 +390,7 @@ class Planner:
         blocked = set()
         tried = []
         free = list(self.roadmap.grid.axis_joints)
-        for repair in range(_REPAIRS + 1):
+        for repair in range(self.retries.repairs + 1):
             if termination():
                 raise PlanningTimeoutError("the time limit passed")
             try:
@@ -392,7 +431,8 @@ class Planner:
         margins = self._waypoint_margins(joints, patches)
         if len(joints) > 2:
             kept = self._shortcut(joints, patches, margins, clearance)
-        for attempt in range(_RESTORED_SHORTCUTS + 2):
+        splits = self.retries.split_shortcuts
+        for attempt in range(splits + 2):
             result = self._validate(joints[kept], s, g, keep)
             k = self._failed_segment(result, joints[kept], patches[kept])
             if result.ok or k < 1 or kept[k] - kept[k - 1] == 1:
@@ -400,7 +440,7 @@ class Planner:
             a, b = kept[k - 1], kept[k] + 1
             restored = a + self._shortcut(joints[a:b], patches[a:b], margins[a:b], clearance,
                                           split=True)
-            if attempt == _RESTORED_SHORTCUTS:
+            if attempt == splits:
                 restored = _turns(joints)
             kept = np.union1d(kept, restored)
         return result, kept
@@ -514,7 +554,7 @@ class Planner:
                             np.tile(patches[inner], 3), np.tile(floors, 3))
         corners = np.zeros(len(joints), dtype=bool)
         corners[inner] = clear.reshape(3, -1).all(axis=0)
-        for _ in range(_RESTORED_SHORTCUTS + 1):
+        for _ in range(self.retries.split_shortcuts + 1):
             if not corners.any():
                 return None
             rounded, origin = cut_corners(joints, corners)
