@@ -20,7 +20,7 @@ from rclpy.parameter import Parameter
 from rpr3_gwr_core.mechanisms.rpr3 import Geometry
 from rpr3_gwr_core.mechanisms.rpr3 import inverse_kinematics
 from rpr3_gwr_msgs.action import ExecuteTrajectory
-from rpr3_gwr_msgs.msg import Configuration
+from rpr3_gwr_msgs.msg import Configuration, PlatformPose
 from rpr3_gwr_msgs.srv import ResetDriver
 from rpr3_gwr_nodes.profiles import SENSOR_QOS
 from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
@@ -138,6 +138,23 @@ def test_bad_resets_get_their_code_and_the_driver_still_serves(rig, configuratio
     assert rig.reset(Q1).success
 
 
+def _step(**last):
+    """A step of rho2 in 1 s from q1, the second point with the fields ``last``."""
+    start = np.array(Q1[:3])
+    trajectory = _trajectory([start, start + [0.0, 0.5, 0.0]], [_stamp(0), _stamp(1)])
+    for field, value in last.items():
+        setattr(trajectory.points[1], field, value)
+    return trajectory
+
+
+def _good_goal():
+    """A quarter step of rho2 with velocities and accelerations, as the planner's."""
+    good = _line(Q1[:3], np.array(Q1[:3]) + [0.0, 0.25, 0.0], 1.0)
+    for point in good.points:
+        point.velocities, point.accelerations = [0.0, 0.25, 0.0], [0.0, 0.0, 0.0]
+    return good
+
+
 def _bad_goals():
     start = np.array(Q1[:3])
     later = start + [0.0, 0.5, 0.0]
@@ -150,6 +167,17 @@ def _bad_goals():
         "equal stamps": _trajectory([start, later], [_stamp(0), _stamp(0)]),
         "0.5 in 1 ns": _trajectory([start, later], [_stamp(0), Duration(nanosec=1)]),
         "elsewhere": _trajectory([[17.0, 30.0, 30.0]], [_stamp(0)]),
+        "nanosec of 2 s": _step(time_from_start=Duration(nanosec=2_000_000_000)),
+        # Read as 0.5 s and 1 s, were nanosec not checked.
+        "negative sec": _trajectory([start, later], [Duration(sec=-1, nanosec=1_500_000_000),
+                                                     Duration(sec=-1, nanosec=2_000_000_000)]),
+        "velocity nan": _step(velocities=[0.0, math.nan, 0.0]),
+        "velocity inf": _step(velocities=[0.0, math.inf, 0.0]),
+        "acceleration nan": _step(accelerations=[math.nan, 0.0, 0.0]),
+        "acceleration -inf": _step(accelerations=[0.0, 0.0, -math.inf]),
+        "2 velocities": _step(velocities=[0.0, 0.5]),
+        "4 accelerations": _step(accelerations=[0.0, 0.0, 0.0, 0.0]),
+        "effort": _step(effort=[0.0, 0.0, 0.0]),
     }
 
 
@@ -157,8 +185,29 @@ def _bad_goals():
 def test_bad_goals_are_rejected_when_they_arrive(rig, name):
     assert rig.reset(Q1).success
     assert not rig.send(_bad_goals()[name]).accepted
-    good = _line(Q1[:3], np.array(Q1[:3]) + [0.0, 0.25, 0.0], 1.0)
-    assert rig.execute(good).error_code == _Result.SUCCESS
+    assert rig.execute(_good_goal()).error_code == _Result.SUCCESS
+
+
+def test_subscribers_with_the_default_qos_get_the_driver_state(rig):
+    # Reliable, depth 10: what create_subscription(..., 10) asks for, as
+    # robot_state_publisher and most tools do.
+    listener = Node("default_qos_listener", context=rig.driver.context)
+    executor = SingleThreadedExecutor(context=rig.driver.context)
+    executor.add_node(listener)
+    got = collections.defaultdict(list)
+    for kind, topic in ((JointState, "joint_states"), (PlatformPose, "platform_pose"),
+                        (MarkerArray, "mechanism_markers"), (DiagnosticArray, "/diagnostics")):
+        listener.create_subscription(kind, topic, lambda msg, topic=topic: got[topic].append(msg),
+                                     10)
+    try:
+        deadline = time.monotonic() + 10.0
+        while len(got) < 4 and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.05)
+    finally:
+        executor.shutdown()
+        listener.destroy_node()
+    assert len(got) == 4, f"only {sorted(got)} arrived"
+    assert got["joint_states"][-1].name == NAMES + ["theta1", "theta2", "theta3"]
 
 
 def test_a_second_goal_is_rejected_while_one_executes(rig):

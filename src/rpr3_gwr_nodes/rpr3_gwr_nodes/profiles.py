@@ -4,8 +4,8 @@ kind of topic, the joint names and the frame of the manipulator's base."""
 from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy,
                        qos_profile_sensor_data)
 
-__all__ = ["LATCHED_QOS", "SENSOR_QOS", "SERVICE_QOS", "JOINT_NAMES", "PASSIVE_JOINT_NAMES",
-           "BASE_FRAME"]
+__all__ = ["LATCHED_QOS", "STATE_QOS", "SENSOR_QOS", "SERVICE_QOS", "JOINT_NAMES",
+           "PASSIVE_JOINT_NAMES", "BASE_FRAME"]
 
 # Maps and roadmaps, as nav2's map server: the latest one, to late joiners too
 # (subscribers use the same profile).
@@ -22,7 +22,18 @@ LATCHED_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
 SERVICE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
                          reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.VOLATILE)
-# Joint states, poses and markers at the control rate: the newest matters.
+# What the driver publishes (joint states, platform pose and markers at the
+# control rate, diagnostics): reliable, as ros2_control's
+# joint_state_broadcaster publishes joint states.  A best-effort writer
+# serves no reader that asks for reliable, as create_subscription(..., 10)
+# does by default (robot_state_publisher, RViz's displays); a reliable one
+# serves both kinds.  Keeping the last 10, a slow reader costs the writer no
+# more than their resends.
+STATE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
+                       reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.VOLATILE)
+# Readers of those streams that would rather skip a sample than wait for its
+# resend (the recorder): best effort matches a reliable writer too.
 SENSOR_QOS = qos_profile_sensor_data
 # The 3-RPR's actuated legs, in the core's joint order.
 JOINT_NAMES = ["rho1", "rho2", "rho3"]

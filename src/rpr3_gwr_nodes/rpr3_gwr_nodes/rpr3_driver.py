@@ -4,16 +4,17 @@ Like the real mechanism, the platform follows the commanded legs by
 continuation of the constraint equations (it is never looked up in a table),
 so it stays in its assembly mode unless a singularity is crossed.
 
-* ``joint_states`` (sensor_msgs/JointState, best effort, ``rate`` Hz): the
-  active legs rho1..rho3 (positions and velocities) and the passive angles
-  theta1..theta3;
-* ``platform_pose`` (rpr3_gwr_msgs/PlatformPose, same rate);
-* ``mechanism_markers`` (visualization_msgs/MarkerArray, same rate and stamp
-  as the joint states, frame ``base``): base points, legs and platform,
-  coloured from green (margin ``warn_margin`` and above) to red
+* ``joint_states`` (sensor_msgs/JointState, reliable as
+  joint_state_broadcaster's, so that readers of any reliability get them,
+  ``rate`` Hz): the active legs rho1..rho3 (positions and velocities) and the
+  passive angles theta1..theta3;
+* ``platform_pose`` (rpr3_gwr_msgs/PlatformPose, same rate and QoS);
+* ``mechanism_markers`` (visualization_msgs/MarkerArray, same rate, stamp
+  and QoS as the joint states, frame ``base``): base points, legs and
+  platform, coloured from green (margin ``warn_margin`` and above) to red
   (``abort_margin``);
-* ``/diagnostics`` (diagnostic_msgs/DiagnosticArray, 1 Hz and at once on an
-  abort): the normalised det(Jx) margin m with level OK when
+* ``/diagnostics`` (diagnostic_msgs/DiagnosticArray, same QoS, 1 Hz and at
+  once on an abort): the normalised det(Jx) margin m with level OK when
   ``|m| >= warn_margin``, WARN when ``abort_margin <= |m| < warn_margin``,
   ERROR when ``|m| < abort_margin`` or while the driver holds after an abort
   (until a reset or a goal that succeeds);
@@ -21,13 +22,17 @@ so it stays in its assembly mode unless a singularity is crossed.
   JointTrajectory in real time (scaled by ``time_scale``).  As ros2_controllers'
   joint_trajectory_controller does, a goal is validated when it arrives and
   rejected there, with the reason in the log: no points, wrong joint names,
-  legs not finite or outside ``leg_limits``, time stamps negative or not
-  strictly increasing, a joint faster than ``max_velocity``, a first point
-  farther than ``start_tolerance`` from the current legs, or another goal
-  executing.  Before each control step the driver checks where the platform
-  would go: if the margin would fall below ``abort_margin``, det(Jx) would
-  change sign, or the platform could not follow, it aborts the goal, says
-  why and with which margin, and holds still at the last safe legs;
+  a point without one position per joint, velocities or accelerations
+  neither empty nor one per joint, efforts (the legs are position
+  controlled), legs not finite or outside ``leg_limits``, velocities or
+  accelerations not finite, time stamps not normalised (``nanosec`` of a
+  second or more), negative or not strictly increasing, a joint faster than
+  ``max_velocity``, a first point farther than ``start_tolerance`` from the
+  current legs, or another goal executing.  Before each control step the
+  driver checks where the platform would go: if the margin would fall below
+  ``abort_margin``, det(Jx) would change sign, or the platform could not
+  follow, it aborts the goal, says why and with which margin, and holds still
+  at the last safe legs;
 * ``reset`` (rpr3_gwr_msgs/ResetDriver): puts the platform at a configuration.
 
 The geometry parameters are the builder's (:mod:`.geometry_parameters`).
@@ -55,7 +60,7 @@ from visualization_msgs.msg import MarkerArray
 
 from .conversions import duration_msg
 from .geometry_parameters import declare_geometry
-from .profiles import JOINT_NAMES, PASSIVE_JOINT_NAMES, SENSOR_QOS
+from .profiles import JOINT_NAMES, PASSIVE_JOINT_NAMES, STATE_QOS
 from .spin import run
 from .visualization import mechanism_markers
 
@@ -126,11 +131,10 @@ class Rpr3Driver(Node):
         self.rho, self.pose, self.margin = self._assembly(
             self.get_parameter("initial_configuration").value)
         self.velocity = np.zeros(3)
-        self.joint_pub = self.create_publisher(JointState, "joint_states", SENSOR_QOS)
-        self.pose_pub = self.create_publisher(PlatformPose, "platform_pose",
-                                              SENSOR_QOS)
-        self.marker_pub = self.create_publisher(MarkerArray, "mechanism_markers", SENSOR_QOS)
-        self.diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self.joint_pub = self.create_publisher(JointState, "joint_states", STATE_QOS)
+        self.pose_pub = self.create_publisher(PlatformPose, "platform_pose", STATE_QOS)
+        self.marker_pub = self.create_publisher(MarkerArray, "mechanism_markers", STATE_QOS)
+        self.diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", STATE_QOS)
         timers = MutuallyExclusiveCallbackGroup()
         self.create_timer(1.0 / self.get_parameter("rate").value, self._publish_state,
                           callback_group=timers)
@@ -270,14 +274,27 @@ class Rpr3Driver(Node):
         points = trajectory.points
         if not points:
             return "the trajectory has no points"
-        if any(len(p.positions) != 3 for p in points):
-            return "every point needs 3 positions"
+        joints = len(JOINT_NAMES)
+        if any(len(p.positions) != joints for p in points):
+            return f"every point needs {joints} positions"
+        for field in ("velocities", "accelerations"):
+            # Empty, as joint_trajectory_controller allows: not given.
+            if any(len(getattr(p, field)) not in (0, joints) for p in points):
+                return f"{field} must be empty or {joints} per point"
+            if not all(math.isfinite(v) for p in points for v in getattr(p, field)):
+                return f"{field} must be finite"
+        if any(len(p.effort) for p in points):
+            return "the legs are position controlled: effort must be empty"
         positions = np.array([list(p.positions) for p in points])
         if not np.all(np.isfinite(positions)):
             return "positions must be finite"
         low, high = self.leg_limits
         if np.any(positions < low) or np.any(positions > high):
             return f"legs must lie within the leg limits [{low:g}, {high:g}]"
+        # A nanosec field of a second or more would shift the stamp past
+        # the checks below (sec -1 and nanosec 2e9 read as +1 s).
+        if any(p.time_from_start.nanosec >= 10**9 for p in points):
+            return "time_from_start.nanosec must be below 10^9 (a second)"
         times = np.array([_seconds(p.time_from_start) for p in points])
         if np.any(times < 0):
             return "time_from_start must not be negative"
