@@ -15,8 +15,9 @@ Parameters: the geometry (``a1``, ``a2``, ``a3``, ``d1``, ``d3`` [length
 unit], ``beta`` [rad], read-only, :mod:`.geometry_parameters`) and the grid
 (``rho1``, ``rho2_range``, ``rho3_range``, ``step`` [length unit]), which
 may change at run time: a change is checked at once (at least two cells along
-each axis, at most ``_MAX_CELLS``, some cell with a direct-kinematic solution)
-and refused with a reason, else the roadmap is rebuilt and republished.  A
+each axis, at most the core's ``MAX_GRID_CELLS``, some cell with a
+direct-kinematic solution) and refused with a reason, else the roadmap is
+rebuilt and republished.  A
 rebuilt roadmap without a patch is not published: the parameters go back to
 the last published grid, whose roadmap stays latched.
 
@@ -30,7 +31,6 @@ topics; the maps and markers, drawn for 2-D grids, are not.
 
 import time
 
-import numpy as np
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
@@ -40,6 +40,7 @@ from rpr3_gwr_core.exceptions import GWRError
 from rpr3_gwr_core.io.cache import cached_roadmap
 from rpr3_gwr_core.paper import FULL_BASE_GRID, FULL_REFINEMENT, rho1_slice
 from rpr3_gwr_core.workspace import AdaptiveGrid, build_roadmap
+from rpr3_gwr_core.workspace.grid import check_roadmap_grid
 from nav_msgs.msg import OccupancyGrid
 from rpr3_gwr_msgs.msg import NSolutionField, WorkspaceRoadmap
 from std_msgs.msg import Header
@@ -47,6 +48,7 @@ from visualization_msgs.msg import MarkerArray
 
 from .conversions import roadmap_to_msgs
 from .geometry_parameters import declare_geometry
+from .memory import release_free_memory, use_one_arena
 from .profiles import BASE_FRAME, LATCHED_QOS
 from .spin import run
 from .visualization import field_maps, roadmap_markers
@@ -54,12 +56,6 @@ from .visualization import field_maps, roadmap_markers
 __all__ = ["RoadmapBuilder", "main"]
 
 _GRID_PARAMETERS = ("rho1", "rho2_range", "rho3_range", "step", "full")
-# Largest grid the builder accepts: about 4 million cells (2001 x 2001).
-_MAX_CELLS = 4_000_000
-# Cells sampled to tell at once whether a grid can give a roadmap at all,
-# and the fewest solvable cells that can (build_roadmap's min_region_cells).
-_PROBE_CELLS = 4096
-_MIN_REGION_CELLS = 8
 
 
 def _length(description, low=0.0, high=1000.0):
@@ -96,7 +92,7 @@ class RoadmapBuilder(Node):
         # Builds run in a callback of their own, woken by the parameter
         # callback, so parameter services keep answering during a build.
         self._rebuild = self.create_guard_condition(
-            self._build, callback_group=MutuallyExclusiveCallbackGroup())
+            self._on_rebuild, callback_group=MutuallyExclusiveCallbackGroup())
         self._rebuild.trigger()
 
     def _grid(self, overrides=None):
@@ -118,27 +114,11 @@ class RoadmapBuilder(Node):
                 return SetParametersResult(successful=True)
         except (GWRError, TypeError, ValueError) as exc:
             return SetParametersResult(successful=False, reason=f"invalid grid: {exc}")
-        if min(grid.shape) < 2:
-            return SetParametersResult(successful=False, reason=(
-                f"a grid of {grid.shape[0]} x {grid.shape[1]} cells has no faces along one "
-                "axis: give each axis at least two cells"))
-        if grid.size > _MAX_CELLS:
-            return SetParametersResult(successful=False, reason=(
-                f"grid of {grid.size} cells exceeds the limit of {_MAX_CELLS}"))
-        solvable = self._cells_with_solutions(grid)
-        if solvable < _MIN_REGION_CELLS:
-            return SetParametersResult(successful=False, reason=(
-                f"about {solvable:.0f} cells of the grid have a direct-kinematic solution at "
-                f"rho1 = {grid.fixed_value(0):g}, fewer than one region needs "
-                f"({_MIN_REGION_CELLS}): its roadmap would be empty"))
+        try:
+            check_roadmap_grid(self.geometry, grid)
+        except GWRError as exc:
+            return SetParametersResult(successful=False, reason=str(exc))
         return SetParametersResult(successful=True)
-
-    def _cells_with_solutions(self, grid):
-        """Estimate of the cells of ``grid`` with a solution, from ``_PROBE_CELLS``
-        cells spread over it."""
-        probe = np.unique(np.linspace(0, grid.size - 1, _PROBE_CELLS).astype(int))
-        count, _ = self.geometry.solve(grid.joints()[probe])
-        return np.count_nonzero(count) * grid.size / probe.size
 
     def _parameters_set(self, parameters):
         if any(p.name in _GRID_PARAMETERS for p in parameters) and (
@@ -150,6 +130,12 @@ class RoadmapBuilder(Node):
         """What the published roadmap answers: its slice, or None if full."""
         grid = self.roadmap.grid
         return None if isinstance(grid, AdaptiveGrid) and grid.base == FULL_BASE_GRID else grid
+
+    def _on_rebuild(self):
+        self._build()
+        # The replaced roadmap, the messages and the build's temporaries are
+        # freed now; malloc would keep their pages (module memory).
+        release_free_memory()
 
     def _build(self):
         grid = self._grid()
@@ -219,4 +205,6 @@ class RoadmapBuilder(Node):
 
 
 def main(args=None):
+    # So that release_free_memory reaches the memory of every thread.
+    use_one_arena()
     run(RoadmapBuilder, MultiThreadedExecutor, args)
