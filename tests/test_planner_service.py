@@ -155,6 +155,32 @@ def test_tiny_limits_are_an_invalid_input_and_the_node_still_serves(service, lim
     assert service.plan(Q1, Q2).success
 
 
+def test_a_passed_time_limit_is_a_timeout_and_the_node_serves_on(service):
+    response = service.plan(Q1, Q2, time_limit=1e-9)
+    assert response.error_code == PlanPath.Response.ERROR_TIMEOUT, response.error_msg
+    assert "time limit" in response.error_msg and not response.trajectory.points
+    assert service.plan(Q1, Q2).success
+
+
+def test_a_one_millisecond_limit_is_answered_with_a_plan_or_a_timeout(service):
+    """Each answer comes within the limit plus the service's own overhead:
+    a plan of what was found by then, or ERROR_TIMEOUT."""
+    for _ in range(10):
+        request = PlanPath.Request(start=_configuration(Q1), goal=_configuration(Q2),
+                                   smooth=True, time_limit=1e-3)
+        response = service.call(request)
+        assert response.error_code in (PlanPath.Response.ERROR_NONE,
+                                       PlanPath.Response.ERROR_TIMEOUT), response.error_msg
+        check_sound(request, response, service.stamp, service.default_limits())
+
+
+@pytest.mark.parametrize("limit", [-1.0, math.nan, math.inf, -math.inf])
+def test_a_time_limit_that_is_no_duration_is_an_invalid_input(service, limit):
+    response = service.plan(Q1, Q2, time_limit=limit)
+    assert response.error_code == PlanPath.Response.ERROR_INVALID_INPUT, response.error_msg
+    assert "time_limit" in response.error_msg
+
+
 @pytest.mark.parametrize("limit", [1e-9, 1e-12, 1e100, 1e308])
 def test_limits_beyond_what_a_duration_holds_are_refused(service, limit):
     response = service.plan(Q1, Q2, max_velocity=limit, max_acceleration=limit)
@@ -262,7 +288,8 @@ def requests(draw):
                                        hostile)),
         smooth=draw(st.booleans()), weighted=draw(st.booleans()),
         feasibility_only=draw(st.booleans()),
-        max_velocity=max_velocity, max_acceleration=max_acceleration)
+        max_velocity=max_velocity, max_acceleration=max_acceleration,
+        time_limit=draw(st.one_of(st.just(0.0), st.just(0.0), st.floats(1e-4, 1.0), hostile)))
 
 
 outcomes = collections.Counter()

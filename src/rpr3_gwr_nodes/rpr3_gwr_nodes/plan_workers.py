@@ -33,12 +33,15 @@ full set.
 """
 
 import collections
+import math
 import multiprocessing
 import os
 import signal
 import threading
 import time
 import warnings
+
+from rpr3_gwr_core.exceptions import PlanningTimeoutError
 
 __all__ = ["PlanWorkers", "WorkerFailed", "WorkersClosed"]
 
@@ -96,21 +99,22 @@ class PlanWorkers:
         """Workers not killed."""
         return self._count
 
-    def plan(self, start, goal, options):
+    def plan(self, start, goal, options, termination):
         """``Planner.plan`` in an idle worker, once there is one.
 
         Raises
         ------
         GWRError
-            What the planner raises.
+            What the planner raises; ``PlanningTimeoutError`` also when no
+            worker is idle before ``termination``'s deadline.
         WorkersClosed
             After :meth:`close`, or once every worker failed.
         WorkerFailed
             When the worker hung, died, or gave no plan within ``timeout``.
         """
-        worker = self._take()
+        worker = self._take(termination)
         try:
-            worker.conn.send((start, goal, options))
+            worker.conn.send((start, goal, options, termination))
             planned, answer = worker.receive(self.timeout)
         except (OSError, EOFError, WorkerFailed) as exc:
             self._retire(worker)
@@ -137,12 +141,16 @@ class PlanWorkers:
         for worker in idle:
             worker.kill()
 
-    def _take(self):
+    def _take(self, termination):
         with self._changed:
             while not self._idle:
                 if self._closed:
                     raise WorkersClosed("the plan workers are closed")
-                self._changed.wait()
+                if termination():
+                    raise PlanningTimeoutError("the time limit passed before a plan worker "
+                                               "was free")
+                remaining = termination.remaining()
+                self._changed.wait(None if math.isinf(remaining) else remaining)
             return self._idle.popleft()
 
     def _give_back(self, worker):
@@ -199,11 +207,11 @@ def _serve(planner, conn, beat, node_process):
     threading.Thread(target=_beat, args=(beat, node_process), daemon=True).start()
     while True:
         try:
-            start, goal, options = conn.recv()
+            start, goal, options, termination = conn.recv()
         except EOFError:
             return
         try:
-            answer = True, planner.plan(start, goal, options)
+            answer = True, planner.plan(start, goal, options, termination)
         except Exception as exc:  # the caller raises it
             answer = False, exc
         conn.send(answer)

@@ -38,7 +38,7 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallb
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rpr3_gwr_core.exceptions import GWRError, InvalidInputError
-from rpr3_gwr_core.planning import DEFAULT_CLEARANCE, PlanOptions, Planner
+from rpr3_gwr_core.planning import DEFAULT_CLEARANCE, PlanOptions, Planner, Termination
 from rpr3_gwr_msgs.msg import GlobalPath, NSolutionField, PlatformPose, WorkspaceRoadmap
 from rpr3_gwr_msgs.srv import PlanPath
 from std_msgs.msg import Header
@@ -46,6 +46,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from visualization_msgs.msg import MarkerArray
 
 from .conversions import MAX_DURATION, duration_msg, roadmap_from_msgs
+from .memory import release_free_memory, use_one_arena
 from .plan_workers import PlanWorkers, WorkerFailed, WorkersClosed
 from .profiles import BASE_FRAME, JOINT_NAMES, LATCHED_QOS, SERVICE_QOS
 from .spin import run
@@ -62,6 +63,7 @@ ERROR_CODES = {
     "SINGULAR": PlanPath.Response.ERROR_SINGULAR,
     "INFEASIBLE": PlanPath.Response.ERROR_INFEASIBLE,
     "VALIDATION_FAILED": PlanPath.Response.ERROR_VALIDATION_FAILED,
+    "TIMEOUT": PlanPath.Response.ERROR_TIMEOUT,
 }
 FEASIBILITY = {
     "same_patch": PlanPath.Response.FEASIBILITY_SAME_PATCH,
@@ -78,17 +80,14 @@ def plan_to_trajectory(plan, header):
     Raises
     ------
     InvalidInputError
-        If the plan's times do not fit builtin_interfaces/Duration or two of
-        them fall within one nanosecond (limits far too high or too low).
+        If the plan's times do not fit builtin_interfaces/Duration (limits
+        far too low); they are whole nanoseconds (the core's timing).
     """
     times = np.asarray(plan.times, dtype=float)
     if times[-1] >= MAX_DURATION:
         raise InvalidInputError(
             f"the limits give a trajectory of {times[-1]:.3g} s, beyond the "
             f"{MAX_DURATION} s that builtin_interfaces/Duration holds: raise them")
-    if np.any(np.diff(np.round(times * 1e9)) <= 0):
-        raise InvalidInputError("the limits are so high that two waypoints are less than 1 ns "
-                                "apart, so time stamps would not increase: lower them")
     trajectory = JointTrajectory(header=header, joint_names=list(JOINT_NAMES))
     for k, joints in enumerate(plan.joints):
         trajectory.points.append(JointTrajectoryPoint(
@@ -134,6 +133,10 @@ class PlannerNode(Node):
                         "locus wherever the roadmap allows; they keep a quarter of it in "
                         "validation, or what the start and goal allow",
             floating_point_range=[FloatingPointRange(from_value=0.0, to_value=0.5)]))
+        self.declare_parameter("default_time_limit", 10.0, ParameterDescriptor(
+            description="Longest time to plan a request that gives no time_limit: past it "
+                        "the answer is the valid path found so far or ERROR_TIMEOUT [s]",
+            floating_point_range=[FloatingPointRange(from_value=1e-3, to_value=3600.0)]))
         self.declare_parameter("plan_workers", _CORES, ParameterDescriptor(
             description="Processes that plan requests, forked with each new roadmap and "
                         "sharing it; 0 plans in the node's process",
@@ -198,6 +201,11 @@ class PlannerNode(Node):
         self.ready.set()
         if previous is not None and previous.workers is not None:
             previous.workers.close()
+        # The replaced state goes here, unless a request in flight still
+        # holds it; malloc would keep its pages (module memory), and the
+        # workers forked next would count them too.
+        del previous
+        release_free_memory()
         # Without a warm-up, forked workers might need numba's compiler lock.
         if warm:
             self._start_workers(planner, stamp)
@@ -221,14 +229,14 @@ class PlannerNode(Node):
         self.get_logger().info(f"{count} plan worker(s) ready in "
                                f"{time.perf_counter() - begin:.3f} s")
 
-    def _plan(self, state, start, goal, options):
+    def _plan(self, state, start, goal, options, termination):
         """A plan from the state's workers, or from its planner here when it
         has none or the worker planning it failed (killed, not replaced: it
         might fail again)."""
         workers = state.workers
         if workers is not None:
             try:
-                return workers.plan(start, goal, options)
+                return workers.plan(start, goal, options, termination)
             except WorkersClosed:
                 pass  # a newer roadmap came meanwhile, or every worker failed
             except WorkerFailed as exc:
@@ -239,7 +247,7 @@ class PlannerNode(Node):
                     f"{exc}; killed, its request plans in the node's process" + (
                         f", {left} worker(s) go on" if left else
                         ", and so does every request until the next roadmap"))
-        return state.planner.plan(start, goal, options)
+        return state.planner.plan(start, goal, options, termination)
 
     def destroy_node(self):
         state = self._state
@@ -263,11 +271,12 @@ class PlannerNode(Node):
 
     def _on_plan(self, request, response):
         state = self._state
+        begin = time.monotonic()
         try:
             if state is None:
                 return _error(response, PlanPath.Response.ERROR_NO_ROADMAP,
                               "no roadmap received yet on 'field' and 'roadmap'")
-            return self._answer(request, state)
+            return self._answer(request, state, begin)
         except GWRError as exc:
             code = ERROR_CODES.get(exc.code, PlanPath.Response.ERROR_INTERNAL)
             return _error(_named(state), code, str(exc),
@@ -278,11 +287,16 @@ class PlannerNode(Node):
             return _error(_named(state), PlanPath.Response.ERROR_INTERNAL,
                           f"internal error: {exc!r}")
 
-    def _answer(self, request, state):
+    def _answer(self, request, state, begin):
         options = self._options(request)
+        limit = request.time_limit or self.get_parameter("default_time_limit").value
+        if not (math.isfinite(limit) and limit > 0):
+            raise InvalidInputError(f"time_limit must be positive and finite (or 0 for the "
+                                    f"planner's default), got {request.time_limit}")
+        termination = Termination(begin + limit)
         start = (request.start.rho1, request.start.rho2, request.start.rho3, request.start.alpha)
         goal = (request.goal.rho1, request.goal.rho2, request.goal.rho3, request.goal.alpha)
-        plan = self._plan(state, start, goal, options)
+        plan = self._plan(state, start, goal, options, termination)
         response = _named(state)
         response.feasibility = FEASIBILITY[plan.reason]
         response.global_paths = [GlobalPath(patch_ids=list(g.patches), cost=g.cost)
@@ -353,6 +367,8 @@ def _error(response, code, message, feasibility=PlanPath.Response.FEASIBILITY_UN
 
 
 def main(args=None):
+    # So that release_free_memory reaches the memory of every thread.
+    use_one_arena()
     # Two threads per core: a thread waits while a worker plans, and converts
     # the plan to messages while the worker plans the next request (8
     # clients on 2 cores: 188 requests/s with 2 threads, 242 with 4, 243 with 6).
