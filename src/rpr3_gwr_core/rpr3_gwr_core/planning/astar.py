@@ -35,13 +35,16 @@ one, is settled first, which on a lattice with many equal-cost staircases
 keeps the search near one of them.
 """
 
+from typing import NamedTuple
+
 import numba
 import numpy as np
 
 from .termination import monotonic
 
-__all__ = ["adjacency", "node_positions", "edge_quanta", "gate_nodes", "work_arrays",
-           "gate_distances", "layered_astar", "UNREACHED", "TIMED_OUT"]
+__all__ = ["NodeGraph", "NodeCosts", "Guide", "WorkArrays", "adjacency", "node_positions",
+           "edge_quanta", "gate_nodes", "work_arrays", "gate_distances", "layered_astar",
+           "UNREACHED", "TIMED_OUT"]
 
 # Cost of a node the search did not reach; far above any path's, with room
 # to add estimates without overflow.
@@ -52,6 +55,94 @@ TIMED_OUT = -1
 _RING = 4096
 # Nodes settled between two looks at the clock (a look costs about 30 ns).
 _CLOCK_PERIOD = 1024
+
+
+class NodeGraph(NamedTuple):
+    """The node graph of a roadmap, read-only once built.
+
+    Attributes
+    ----------
+    indptr, indices : ndarray
+        Adjacency (CSR, :func:`adjacency`).
+    quanta : ndarray of uint16, shape (indices.size,)
+        Edge lengths in quanta (:func:`edge_quanta`).
+    node_cell : ndarray of int, shape (n_nodes,)
+        Cell of each node.
+    node_patch : ndarray of int32, shape (n_nodes,)
+        Index of each node's patch, ascending.
+    position : ndarray of int32, shape (n_nodes, d)
+        Coordinates of the nodes' cells in half quanta (:func:`node_positions`).
+    """
+
+    indptr: np.ndarray
+    indices: np.ndarray
+    quanta: np.ndarray
+    node_cell: np.ndarray
+    node_patch: np.ndarray
+    position: np.ndarray
+
+
+class NodeCosts(NamedTuple):
+    """What a node costs in one search.
+
+    Attributes
+    ----------
+    node_cost : ndarray of int64, shape (n_nodes,)
+        Cost of each node in whole units (needed on the searched patches).
+    node_margin : ndarray of float64, shape (n_nodes,)
+        Margin magnitude of each node's solution.
+    clearance : float
+    penalty : int
+        Nodes with a margin below ``clearance`` cost ``penalty`` times more.
+    """
+
+    node_cost: np.ndarray
+    node_margin: np.ndarray
+    clearance: float
+    penalty: int
+
+
+class Guide(NamedTuple):
+    """The heuristic of :func:`layered_astar` (module doc).
+
+    Attributes
+    ----------
+    cost_floor : int
+        Smallest ``node_cost`` on the path's patches (scales the heuristic);
+        0 searches without heuristic.
+    fields : ndarray of int64
+        :func:`gate_distances` of patches, each at an offset of its own.
+    to_gate_start, rest : ndarray of int64, shape (layers,)
+        Costs for the layers before the last: a node ``v`` in layer ``i``
+        costs at least ``fields[to_gate_start[i] + v] + rest[i]`` to the
+        target (the distances of its patch to the next gate, and the least
+        such bound beyond that gate).
+    landmark_start, landmark_goal : ndarray of int64, shape (k,)
+        The last layer's patch's distances to each of its gates, at
+        ``fields[landmark_start[j] + v]``, and the target's: within the
+        patch a node costs at least their difference.
+    """
+
+    cost_floor: int
+    fields: np.ndarray
+    to_gate_start: np.ndarray
+    rest: np.ndarray
+    landmark_start: np.ndarray
+    landmark_goal: np.ndarray
+
+
+class WorkArrays(NamedTuple):
+    """The arrays one search at a time works in (:func:`work_arrays`):
+    ``g`` all :data:`UNREACHED` and ``closed`` all zero between searches."""
+
+    g: np.ndarray
+    pred: np.ndarray
+    closed: np.ndarray
+    touched: np.ndarray
+    entry_node: np.ndarray
+    entry_next: np.ndarray
+    waiting_node: np.ndarray
+    waiting_key: np.ndarray
 
 
 @numba.njit(cache=True)
@@ -165,7 +256,7 @@ def work_arrays(n_nodes, n_links):
 
     Returns
     -------
-    tuple of ndarray
+    WorkArrays
         ``g`` (int64, all :data:`UNREACHED`), ``pred`` (int64), ``closed``
         (uint8, all zero), ``touched`` (int64), each of ``n_nodes``; then
         the open set's entries (node and next entry, int32), and the nodes
@@ -173,21 +264,24 @@ def work_arrays(n_nodes, n_links):
         ``n_links + n_nodes``.
     """
     capacity = n_links + n_nodes
-    return (np.full(n_nodes, UNREACHED, np.int64), np.empty(n_nodes, np.int64),
-            np.zeros(n_nodes, np.uint8), np.empty(n_nodes, np.int64),
-            np.empty(capacity, np.int32), np.empty(capacity, np.int32),
-            np.empty(capacity, np.int32), np.empty(capacity, np.int64))
+    return WorkArrays(np.full(n_nodes, UNREACHED, np.int64), np.empty(n_nodes, np.int64),
+                      np.zeros(n_nodes, np.uint8), np.empty(n_nodes, np.int64),
+                      np.empty(capacity, np.int32), np.empty(capacity, np.int32),
+                      np.empty(capacity, np.int32), np.empty(capacity, np.int64))
 
 
 @numba.njit(cache=True, nogil=True)
-def _search(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin, clearance,
-            penalty, position, layer, sources, target, blocked, cost_floor, fields,
-            to_gate_start, rest, landmark_start, landmark_goal, deadline, g, pred, closed,
-            touched, entry_node, entry_next, waiting_node, waiting_key):
+def _search(graph, costs, layer, sources, target, blocked, guide, deadline, work):
     """Least costs from ``sources`` through the layers, up to ``target`` (all
     reachable nodes when it is -1), stopping when the monotonic clock passes
     ``deadline``; returns how many nodes it touched, which are the first
     entries of ``touched``, and whether it stopped for the deadline."""
+    # Unpacked once: the loop then reads plain local arrays, without the
+    # reference counting of taking them out of a bundle at each use.
+    indptr, indices, quanta, node_cell, node_patch, position = graph
+    node_cost, node_margin, clearance, penalty = costs
+    cost_floor, fields, to_gate_start, rest, landmark_start, landmark_goal = guide
+    g, pred, closed, touched, entry_node, entry_next, waiting_node, waiting_key = work
     goal = max(target, 0)
     last = layer[node_patch[target]] if target >= 0 else 0
     # The ring's buckets are stacks linked through the entries.
@@ -298,9 +392,7 @@ def _reset(g, closed, touched, n_touched):
 
 
 @numba.njit(cache=True, nogil=True)
-def gate_distances(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
-                   clearance, penalty, position, n_patches, k, sources, g, pred, closed,
-                   touched, entry_node, entry_next, waiting_node, waiting_key):
+def gate_distances(graph, costs, n_patches, k, sources, work):
     """Least cost from each node of one patch to any of ``sources`` within the
     patch, in the units of :func:`layered_astar`.
 
@@ -310,88 +402,54 @@ def gate_distances(indptr, indices, quanta, node_cell, node_patch, node_cost, no
 
     Parameters
     ----------
+    graph : NodeGraph
+    costs : NodeCosts
+        ``node_cost`` 1 on the patch's nodes.
     n_patches, k : int
         Number of patches, index of this one; its nodes are those with
         ``node_patch == k``, contiguous.
     sources : ndarray of int
         Nodes of the patch at cost 0.
-    node_cost : ndarray of int64, shape (n_nodes,)
-        1 on the patch's nodes.
-    g, pred, closed, touched, entry_node, entry_next, waiting_node, waiting_key :
-        Work arrays (:func:`work_arrays`).
+    work : WorkArrays
 
     Returns
     -------
     ndarray of int64, shape (patch nodes,)
         :data:`UNREACHED` where no source can be reached.
     """
-    first = np.searchsorted(node_patch, k)
-    stop = np.searchsorted(node_patch, k, side="right")
+    first = np.searchsorted(graph.node_patch, k)
+    stop = np.searchsorted(graph.node_patch, k, side="right")
     layer = np.full(n_patches, -1, np.int32)
     layer[k] = 0
     empty = np.zeros(0, np.int64)
-    n_touched, _ = _search(indptr, indices, quanta, node_cell, node_patch, node_cost,
-                           node_margin, clearance, penalty, position, layer, sources, -1, empty,
-                           0, empty, empty, empty, empty, empty, np.inf, g, pred, closed,
-                           touched, entry_node, entry_next, waiting_node, waiting_key)
-    out = g[first:stop].copy()
-    _reset(g, closed, touched, n_touched)
+    n_touched, _ = _search(graph, costs, layer, sources, -1, empty,
+                           (0, empty, empty, empty, empty, empty), np.inf, work)
+    out = work.g[first:stop].copy()
+    _reset(work.g, work.closed, work.touched, n_touched)
     return out
 
 
 @numba.njit(cache=True, nogil=True)
-def layered_astar(indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin,
-                  clearance, penalty, position, layer, source, target, blocked,
-                  cost_floor, fields, to_gate_start, rest, landmark_start, landmark_goal,
-                  deadline, g, pred, closed, touched, entry_node, entry_next, waiting_node,
-                  waiting_key):
+def layered_astar(graph, costs, layer, source, target, blocked, guide, deadline, work):
     """Least-cost node path from ``source`` to ``target`` through the layers.
 
     Parameters
     ----------
-    indptr, indices : ndarray
-        The node graph (:func:`adjacency`).
-    quanta : ndarray of uint16, shape (indices.size,)
-        Edge lengths in quanta (:func:`edge_quanta`).
-    node_cell : ndarray of int, shape (n_nodes,)
-        Cell of each node.
-    node_patch : ndarray of int32, shape (n_nodes,)
-        Index of each node's patch, ascending.
-    node_cost : ndarray of int64, shape (n_nodes,)
-        Cost of each node in whole units (needed on the path's patches).
-    node_margin : ndarray of float64, shape (n_nodes,)
-        Margin magnitude of each node's solution.
-    clearance : float
-    penalty : int
-        Nodes with a margin below ``clearance`` cost ``penalty`` times more.
-    position : ndarray of int32, shape (n_nodes, d)
-        Coordinates of the nodes' cells in half quanta (:func:`node_positions`).
+    graph : NodeGraph
+    costs : NodeCosts
     layer : ndarray of int32, shape (n_patches,)
         Position of each patch on the global path, -1 off it.
     source, target : int
         Nodes of the start cell (layer 0) and of the goal cell (last layer).
     blocked : ndarray of int64, shape (k,)
         Cells not to enter, ascending.
-    cost_floor : int
-        Smallest ``node_cost`` on the path's patches (scales the heuristic),
-        at least 1.
-    fields : ndarray of int64
-        :func:`gate_distances` of patches, each at an offset of its own.
-    to_gate_start, rest : ndarray of int64, shape (layers,)
-        Costs for the layers before the last: a node ``v`` in layer ``i``
-        costs at least ``fields[to_gate_start[i] + v] + rest[i]`` to the
-        target (the distances of its patch to the next gate, and the least
-        such bound beyond that gate).
-    landmark_start, landmark_goal : ndarray of int64, shape (k,)
-        The last layer's patch's distances to each of its gates, at
-        ``fields[landmark_start[j] + v]``, and the target's: within the
-        patch a node costs at least their difference.
+    guide : Guide
+        The heuristic; its ``cost_floor`` at least 1.
     deadline : float
         [s] on the monotonic clock (:func:`~.termination.monotonic`); the
         search stops there.
-    g, pred, closed, touched, entry_node, entry_next, waiting_node, waiting_key :
-        Work arrays (:func:`work_arrays`): ``g`` all :data:`UNREACHED` and
-        ``closed`` all zero on entry, and so again on return.
+    work : WorkArrays
+        Left as it was found.
 
     Returns
     -------
@@ -403,11 +461,9 @@ def layered_astar(indptr, indices, quanta, node_cell, node_patch, node_cost, nod
         :data:`TIMED_OUT` when the deadline passed first.
     """
     sources = np.full(1, source, np.int64)
-    n_touched, timed_out = _search(
-        indptr, indices, quanta, node_cell, node_patch, node_cost, node_margin, clearance,
-        penalty, position, layer, sources, target, blocked, cost_floor, fields, to_gate_start,
-        rest, landmark_start, landmark_goal, deadline, g, pred, closed, touched, entry_node,
-        entry_next, waiting_node, waiting_key)
+    n_touched, timed_out = _search(graph, costs, layer, sources, target, blocked, guide,
+                                   deadline, work)
+    g, pred, closed = work.g, work.pred, work.closed
     cost = TIMED_OUT if timed_out else g[target]
     count = 0
     if closed[target] and not timed_out:
@@ -420,5 +476,5 @@ def layered_astar(indptr, indices, quanta, node_cell, node_patch, node_cost, nod
     for k in range(count - 1, -1, -1):
         nodes[k] = node
         node = pred[node]
-    _reset(g, closed, touched, n_touched)
+    _reset(g, closed, work.touched, n_touched)
     return nodes, cost

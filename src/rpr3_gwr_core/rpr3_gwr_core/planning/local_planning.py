@@ -39,8 +39,8 @@ import weakref
 
 import numpy as np
 
-from .astar import (TIMED_OUT, UNREACHED, adjacency, edge_quanta, gate_distances, gate_nodes,
-                    layered_astar, node_positions, work_arrays)
+from .astar import (TIMED_OUT, UNREACHED, Guide, NodeCosts, NodeGraph, adjacency, edge_quanta,
+                    gate_distances, gate_nodes, layered_astar, node_positions, work_arrays)
 from .termination import NEVER
 from ..exceptions import InfeasiblePathError, InvalidInputError, PlanningTimeoutError
 from ..workspace.segmentation import linked_solutions
@@ -120,6 +120,8 @@ class LocalPlanner:
         self._quantum = _lattice_quantum(seg.field.grid.steps)
         self._position = node_positions(self._coords[self._node_cell], self._quantum)
         self._quanta = edge_quanta(self._indptr, self._indices, self._position)
+        self._graph = NodeGraph(self._indptr, self._indices, self._quanta, self._node_cell,
+                                self._node_patch, self._position)
         self._node_margin = np.abs(seg.field.margin[self._node_cell, self._node_slot])
         # Per clearance weight, costs are filled patch by patch on first use
         # (the clearance of a large 3-D patch takes a while).
@@ -210,11 +212,10 @@ class LocalPlanner:
             # first time, and write the same values.
             work = self._borrow()
             try:
+                costs = NodeCosts(self._costed(0.0, k)[0], self._node_margin, clearance,
+                                  _LOW_MARGIN_FACTOR)
                 fields[offset:offset + self._offsets[k + 1] - self._offsets[k]] = gate_distances(
-                    self._indptr, self._indices, self._quanta, self._node_cell,
-                    self._node_patch, self._costed(0.0, k)[0], self._node_margin, clearance,
-                    _LOW_MARGIN_FACTOR, self._position, self._pids.size, k,
-                    self._patch_nodes(k, other), *work)
+                    self._graph, costs, self._pids.size, k, self._patch_nodes(k, other), work)
             finally:
                 self._work.put(work)
             filled.add((k, other))
@@ -363,9 +364,9 @@ class LocalPlanner:
         work = self._borrow()
         try:
             nodes, cost = layered_astar(
-                self._indptr, self._indices, self._quanta, self._node_cell, self._node_patch,
-                costs, self._node_margin, key[1], _LOW_MARGIN_FACTOR, self._position, layer,
-                source, target, blocked, floor, *heuristic, termination.deadline, *work)
+                self._graph, NodeCosts(costs, self._node_margin, key[1], _LOW_MARGIN_FACTOR),
+                layer, source, target, blocked, Guide(floor, *heuristic), termination.deadline,
+                work)
         finally:
             # layered_astar leaves its work arrays as it found them.
             self._work.put(work)
