@@ -177,3 +177,32 @@ def test_a_stopped_worker_holds_up_only_its_own_request(loaded_planner):
         stopped_at = time.monotonic()
         time.sleep(WINDOW)
     _check("busy worker stopped", load, stopped_at, reference, second)
+
+
+class _LargeAnswers:
+    """A planner whose every answer is far larger than a pipe holds."""
+
+    def plan(self, start, goal, options, termination):
+        return np.zeros(1 << 20)
+
+
+def test_a_worker_stopped_halfway_through_its_answer_is_found_hung():
+    """The worker fills the answer pipe and waits for the node to read; it is
+    stopped there, with most of its answer unwritten.  Reading what came
+    must not wait for the rest for ever."""
+    import multiprocessing
+    import select
+
+    from rpr3_gwr_nodes.plan_workers import WorkerFailed, _Worker
+
+    worker = _Worker(multiprocessing.get_context("fork"), _LargeAnswers())
+    try:
+        worker.send((None, None, None, None))
+        assert select.select([worker.answers], [], [], ANSWER_TIMEOUT)[0], "no answer began"
+        os.kill(worker.pid, signal.SIGSTOP)
+        begin = time.monotonic()
+        with pytest.raises(WorkerFailed, match="hung"):
+            worker.receive(ANSWER_TIMEOUT)
+        assert time.monotonic() - begin < ANSWER_TIMEOUT / 2
+    finally:
+        worker.kill()

@@ -18,10 +18,11 @@ They ignore SIGINT (the node stops them once its requests are answered) and
 end when they find the node's process gone (killed, without a shutdown), so
 they do not outlive it holding the roadmap's memory.
 
-Each worker has a pipe of its own and is handed one request at a time: with
+Each worker has pipes of its own and is handed one request at a time: with
 a task queue shared by all of them, a worker stopped (SIGSTOP, a debugger)
-while reading it kept the queue's lock and stalled every other worker.  A
-worker is hung when its heartbeat, stamped by a thread of its own, is
+while reading it kept the queue's lock and stalled every other worker.  Its
+answer is read as it arrives, length first, so that a worker stopped
+halfway through writing it is found hung like any other.  A worker is hung when its heartbeat, stamped by a thread of its own, is
 older than a few seconds: a stopped or dead process's threads stamp
 nothing, while a busy worker's thread goes on stamping however long its plan
 takes (the compiled searches release the interpreter's lock), so a long plan
@@ -36,7 +37,10 @@ import collections
 import math
 import multiprocessing
 import os
+import pickle
+import select
 import signal
+import struct
 import threading
 import time
 import warnings
@@ -51,6 +55,9 @@ _BEAT_PERIOD = 0.1
 # Age of the last heartbeat that makes a worker hung [s]: many periods, as
 # a loaded machine may not run the heartbeat's thread for a while.
 _HANG_AFTER = 2.0
+# An answer's length ahead of it on the answer pipe, and the most read at once.
+_LENGTH = struct.Struct("<Q")
+_CHUNK = 1 << 20
 
 
 class WorkersClosed(Exception):
@@ -114,7 +121,7 @@ class PlanWorkers:
         """
         worker = self._take(termination)
         try:
-            worker.conn.send((start, goal, options, termination))
+            worker.send((start, goal, options, termination))
             planned, answer = worker.receive(self.timeout)
         except (OSError, EOFError, WorkerFailed) as exc:
             self._retire(worker)
@@ -176,45 +183,69 @@ class _Worker:
     def __init__(self, context, planner):
         # A time.monotonic() stamp in memory shared with the worker.
         self.beat = context.RawValue("d", time.monotonic())
-        self.conn, child = context.Pipe()
+        # Requests go down a pipe, answers come up another, read as they
+        # arrive: a worker stopped halfway through writing a large answer
+        # would leave a blocking read waiting for its end for ever.
+        requests, self.requests = context.Pipe(duplex=False)
+        self.answers, answering = os.pipe()
         self.process = context.Process(target=_serve, daemon=True,
-                                       args=(planner, child, self.beat, os.getpid()))
+                                       args=(planner, requests, answering, self.beat,
+                                             os.getpid()))
         self.process.start()
         self.pid = self.process.pid
-        child.close()
+        requests.close()
+        os.close(answering)
+
+    def send(self, request):
+        self.requests.send(request)
 
     def receive(self, timeout):
         """The worker's answer: ``(True, plan)`` or ``(False, exception)``."""
         deadline = time.monotonic() + timeout
-        while not self.conn.poll(_BEAT_PERIOD):
-            silent = time.monotonic() - self.beat.value
-            if silent > _HANG_AFTER:
-                raise WorkerFailed(f"plan worker {self.pid} hung (stopped or dead): no "
-                                   f"heartbeat for {silent:.1f} s")
-            if time.monotonic() > deadline:
-                raise WorkerFailed(f"plan worker {self.pid} gave no plan within {timeout:g} s")
-        return self.conn.recv()
+        received = bytearray()
+        size = None
+        while size is None or len(received) < _LENGTH.size + size:
+            if not select.select([self.answers], [], [], _BEAT_PERIOD)[0]:
+                silent = time.monotonic() - self.beat.value
+                if silent > _HANG_AFTER:
+                    raise WorkerFailed(f"plan worker {self.pid} hung (stopped or dead): no "
+                                       f"heartbeat for {silent:.1f} s")
+                if time.monotonic() > deadline:
+                    raise WorkerFailed(f"plan worker {self.pid} gave no plan within "
+                                       f"{timeout:g} s")
+                continue
+            chunk = os.read(self.answers, _CHUNK)
+            if not chunk:
+                raise WorkerFailed(f"plan worker {self.pid} died")
+            received += chunk
+            if size is None and len(received) >= _LENGTH.size:
+                (size,) = _LENGTH.unpack_from(received)
+        return pickle.loads(received[_LENGTH.size:])
 
     def kill(self):
         self.process.kill()
         self.process.join()
-        self.conn.close()
+        self.requests.close()
+        os.close(self.answers)
 
 
-def _serve(planner, conn, beat, node_process):
+def _serve(planner, requests, answers, beat, node_process):
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     threading.Thread(target=_beat, args=(beat, node_process), daemon=True).start()
     while True:
         try:
-            start, goal, options, termination = conn.recv()
+            start, goal, options, termination = requests.recv()
         except EOFError:
             return
         try:
             answer = True, planner.plan(start, goal, options, termination)
         except Exception as exc:  # the caller raises it
             answer = False, exc
-        conn.send(answer)
+        data = pickle.dumps(answer, protocol=pickle.HIGHEST_PROTOCOL)
+        view = memoryview(_LENGTH.pack(len(data)) + data)
+        while view:
+            view = view[os.write(answers, view):]
 
 
 def _beat(beat, node_process):
