@@ -18,19 +18,19 @@ They ignore SIGINT (the node stops them once its requests are answered) and
 end when they find the node's process gone (killed, without a shutdown), so
 they do not outlive it holding the roadmap's memory.
 
-Each worker has pipes of its own and is handed one request at a time: with
-a task queue shared by all of them, a worker stopped (SIGSTOP, a debugger)
+Each worker has pipes of its own and is handed one request at a time: with a
+task queue shared by all of them, a worker stopped (SIGSTOP, a debugger)
 while reading it kept the queue's lock and stalled every other worker.  Its
-answer is read as it arrives, length first, so that a worker stopped
-halfway through writing it is found hung like any other.  A worker is hung when its heartbeat, stamped by a thread of its own, is
-older than a few seconds: a stopped or dead process's threads stamp
-nothing, while a busy worker's thread goes on stamping however long its plan
-takes (the compiled searches release the interpreter's lock), so a long plan
-is not taken for a hang.  A hung worker is killed (SIGKILL ends a stopped
-process too), its request is given back to the caller to plan, and the
-other workers go on.  It is not replaced: what made it fail (a signal, a
-lack of memory, a bug) may fail a new one as well; the next roadmap forks a
-full set.
+answer is read as it arrives, length first, so that a worker stopped halfway
+through writing it is found hung like any other.  A worker is hung when its
+heartbeat, stamped by a thread of its own, is older than a few seconds: a
+stopped or dead process's threads stamp nothing, while a busy worker's thread
+goes on stamping however long its plan takes (the compiled searches release
+the interpreter's lock), so a long plan is not taken for a hang.  A hung
+worker is killed (SIGKILL ends a stopped process too), its request is given
+back to the caller to plan, and the other workers go on.  It is not replaced:
+what made it fail (a signal, a lack of memory, a bug) may fail a new one as
+well; the next roadmap forks a full set.
 """
 
 import collections
