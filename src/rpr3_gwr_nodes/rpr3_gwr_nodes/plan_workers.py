@@ -35,6 +35,7 @@ well; the next roadmap forks a full set.
 
 import collections
 import math
+import mmap
 import multiprocessing
 import os
 import pickle
@@ -57,6 +58,7 @@ _BEAT_PERIOD = 0.1
 _HANG_AFTER = 2.0
 # An answer's length ahead of it on the answer pipe, and the most read at once.
 _LENGTH = struct.Struct("<Q")
+_STAMP = struct.Struct("d")
 _CHUNK = 1 << 20
 
 
@@ -181,8 +183,12 @@ class _Worker:
     """A worker process, the node's end of its pipe and its heartbeat."""
 
     def __init__(self, context, planner):
-        # A time.monotonic() stamp in memory shared with the worker.
-        self.beat = context.RawValue("d", time.monotonic())
+        # A time.monotonic() stamp in a mapping of this worker's own: a
+        # block of multiprocessing's shared heap, freed with an earlier
+        # worker, could be handed out again while a process forked from it
+        # still stamps it.
+        self.beat = mmap.mmap(-1, _STAMP.size)
+        _STAMP.pack_into(self.beat, 0, time.monotonic())
         # Requests go down a pipe, answers come up another, read as they
         # arrive: a worker stopped halfway through writing a large answer
         # would leave a blocking read waiting for its end for ever.
@@ -206,7 +212,7 @@ class _Worker:
         size = None
         while size is None or len(received) < _LENGTH.size + size:
             if not select.select([self.answers], [], [], _BEAT_PERIOD)[0]:
-                silent = time.monotonic() - self.beat.value
+                silent = time.monotonic() - _STAMP.unpack_from(self.beat)[0]
                 if silent > _HANG_AFTER:
                     raise WorkerFailed(f"plan worker {self.pid} hung (stopped or dead): no "
                                        f"heartbeat for {silent:.1f} s")
@@ -227,6 +233,7 @@ class _Worker:
         self.process.join()
         self.requests.close()
         os.close(self.answers)
+        self.beat.close()
 
 
 def _serve(planner, requests, answers, beat, node_process):
@@ -252,6 +259,6 @@ def _beat(beat, node_process):
     # An orphan's parent is another process; its pipe would never close,
     # as the other workers may hold copies of its end.
     while os.getppid() == node_process:
-        beat.value = time.monotonic()
+        _STAMP.pack_into(beat, 0, time.monotonic())
         time.sleep(_BEAT_PERIOD)
     os._exit(0)
