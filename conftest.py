@@ -3,8 +3,15 @@ full 3-DOF roadmap is built once whether a core test, the CLI or a node asks
 for it first, and nothing outside the session's temporary folder is read."""
 
 import os
+import pathlib
+import sys
 
 import pytest
+
+# The independent pose-space reference (pose_reference) lives with the core's
+# tests; the integration tests check the service's answers with it too.
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent / "src" / "rpr3_gwr_core"
+                       / "test"))
 
 
 @pytest.fixture(scope="session", autouse=True)

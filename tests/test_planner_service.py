@@ -28,6 +28,7 @@ from rpr3_gwr_nodes.profiles import LATCHED_QOS
 from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
 
+from pose_reference import follow, legs_of
 from process_tree import children, wait_for_children
 
 D = math.radians
@@ -132,6 +133,16 @@ def check_sound(request, response, stamp, default_limits):
                                rtol=0, atol=1e-9)
     np.testing.assert_allclose(points[-1].positions, [goal.rho1, goal.rho2, goal.rho3],
                                rtol=0, atol=1e-9)
+    # A second, independent continuation, in pose space, follows the
+    # trajectory from the pose it starts at to the one it ends at, keeping
+    # one sign of det Jx and the planner's margin threshold.
+    poses = np.array([[p.x, p.y, p.alpha] for p in response.poses])
+    np.testing.assert_allclose(legs_of(poses[0]), numbers[0, :3], rtol=0, atol=1e-7)
+    followed = follow(numbers[:, :3], poses[0], 1e-3 * (1 - 1e-3))
+    assert followed["ok"], followed["why"]
+    np.testing.assert_allclose(followed["pose"][:2], poses[-1, :2], rtol=0, atol=1e-6)
+    assert abs(math.remainder(followed["pose"][2] - poses[-1, 2], 2 * math.pi)) < 1e-6
+    np.testing.assert_allclose(legs_of(poses[-1]), numbers[-1, :3], rtol=0, atol=1e-7)
     # The limits hold between the points, for a driver moving each joint
     # linearly from point to point: the joint change over each interval, and
     # the change of the point velocities over it.

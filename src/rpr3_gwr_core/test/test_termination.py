@@ -5,6 +5,7 @@ import time
 
 import pytest
 
+from pose_reference import assert_executable
 from rpr3_gwr_core import PlanningTimeoutError, Planner, PlanOptions, Termination
 from rpr3_gwr_core.exceptions import InvalidInputError
 from rpr3_gwr_core.planning.termination import monotonic
@@ -64,6 +65,7 @@ def test_a_deadline_passing_before_smoothing_returns_the_valid_path_unsmoothed(p
     the deadline: the validated path comes back as it is."""
     plan = planner.plan(Q1, Q2, PlanOptions(smooth=True), termination=_AfterChecks(2))
     assert plan.validation.ok and not plan.smoothed
+    assert_executable(plan, plan.poses[-1], planner.min_margin)
     assert planner.plan(Q1, Q2, PlanOptions(smooth=True)).smoothed
 
 
