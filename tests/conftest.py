@@ -7,6 +7,7 @@ of its own, chosen here before any test imports rclpy.
 import os
 import pathlib
 import random
+import threading
 
 import pytest
 
@@ -45,3 +46,23 @@ def ros_context():
 def module_context():
     """A private rclpy context for a test module's nodes, shut down after it."""
     yield from _private_context()
+
+
+@pytest.fixture
+def client_node(ros_context):
+    """A node of the test's own on a private context, spun by a
+    single-threaded executor in a thread of its own, destroyed after the test."""
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
+
+    node = Node("test_client", context=ros_context)
+    executor = SingleThreadedExecutor(context=ros_context)
+    executor.add_node(node)
+    spinner = threading.Thread(target=executor.spin, daemon=True)
+    spinner.start()
+    try:
+        yield node
+    finally:
+        executor.shutdown()
+        spinner.join(timeout=10.0)
+        node.destroy_node()

@@ -20,8 +20,6 @@ import threading
 import time
 
 import pytest
-from rclpy.executors import SingleThreadedExecutor
-from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.parameter_client import AsyncParameterClient
 from rpr3_gwr_core.exceptions import GWRError
@@ -134,36 +132,26 @@ def _settled(pids, seconds=1.0):
         time.sleep(0.1)
 
 
-def test_forty_roadmap_swaps_leave_every_process_within_20_percent(ros_context, tmp_path):
+def test_forty_roadmap_swaps_leave_every_process_within_20_percent(client_node, tmp_path):
     log_path = tmp_path / "nodes.log"
-    node = Node("memory_test_client", context=ros_context)
-    executor = SingleThreadedExecutor(context=ros_context)
-    executor.add_node(node)
-    spinner = threading.Thread(target=executor.spin, daemon=True)
-    spinner.start()
-    try:
-        with open(log_path, "w") as log, \
-                _process("roadmap_builder", log) as builder, \
-                _process("planner", log) as planner:
-            swapper = _Swapper(node, planner)
-            swapper.swap(None)
-            begin = time.monotonic()
-            sizes = []
-            for k in range(1, SWAPS + 1):
-                workers = swapper.swap(14.0 if k % 2 else 17.0)
-                if k in (1, SWAPS):
-                    assert len(workers) == os.cpu_count(), (workers, log_path.read_text())
-                    sizes.append(_settled({
-                        "builder": builder.pid, "planner": planner.pid,
-                        **{f"plan worker {n}": pid for n, pid in enumerate(sorted(workers))}}))
-            print(f"\n{SWAPS} swaps in {time.monotonic() - begin:.1f} s; resident memory "
-                  f"[MB] after the first and the last: " + ", ".join(
-                      f"{name} {sizes[0][name]:.0f} -> {sizes[1][name]:.0f}"
-                      for name in sizes[0]))
-    finally:
-        executor.shutdown()
-        spinner.join(timeout=10.0)
-        node.destroy_node()
+    with open(log_path, "w") as log, \
+            _process("roadmap_builder", log) as builder, \
+            _process("planner", log) as planner:
+        swapper = _Swapper(client_node, planner)
+        swapper.swap(None)
+        begin = time.monotonic()
+        sizes = []
+        for k in range(1, SWAPS + 1):
+            workers = swapper.swap(14.0 if k % 2 else 17.0)
+            if k in (1, SWAPS):
+                assert len(workers) == os.cpu_count(), (workers, log_path.read_text())
+                sizes.append(_settled({
+                    "builder": builder.pid, "planner": planner.pid,
+                    **{f"plan worker {n}": pid for n, pid in enumerate(sorted(workers))}}))
+        print(f"\n{SWAPS} swaps in {time.monotonic() - begin:.1f} s; resident memory "
+              f"[MB] after the first and the last: " + ", ".join(
+                  f"{name} {sizes[0][name]:.0f} -> {sizes[1][name]:.0f}"
+                  for name in sizes[0]))
     grown = {name: sizes[1][name] / sizes[0][name] for name in sizes[0]}
     assert max(grown.values()) <= GROWTH, (sizes, log_path.read_text()[-3000:])
 

@@ -10,12 +10,9 @@ import os
 import pathlib
 import signal
 import subprocess
-import threading
 import time
 
 import pytest
-from rclpy.executors import SingleThreadedExecutor
-from rclpy.node import Node
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, rho1_slice
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
 from rpr3_gwr_msgs.msg import Configuration, NSolutionField, WorkspaceRoadmap
@@ -35,16 +32,11 @@ REQUEST = PlanPath.Request(
 
 
 @contextlib.contextmanager
-def _planner_process(context):
-    """A planner process fed a roadmap, once it planned, its plan workers
-    started, and a client: ``(process, workers, client)``."""
+def _planner_process(node):
+    """A planner process fed a roadmap by ``node``, once it planned, its plan
+    workers started, and a client: ``(process, workers, client)``."""
     process = subprocess.Popen([str(PLANNER)], env=os.environ.copy(), stdout=subprocess.PIPE,
                                stderr=subprocess.STDOUT, text=True)
-    node = Node("shutdown_test_client", context=context)
-    executor = SingleThreadedExecutor(context=context)
-    executor.add_node(node)
-    spinner = threading.Thread(target=executor.spin, daemon=True)
-    spinner.start()
     try:
         roadmap = build_roadmap(PAPER_GEOMETRY, rho1_slice(step=0.25))
         field_msg, roadmap_msg = roadmap_to_msgs(roadmap, Header())
@@ -73,9 +65,6 @@ def _planner_process(context):
         if process.poll() is None:
             process.kill()
             process.communicate(timeout=60.0)
-        executor.shutdown()
-        spinner.join(timeout=10.0)
-        node.destroy_node()
 
 
 def _answered(futures, timeout=10.0):
@@ -93,8 +82,8 @@ def _ended(pids, timeout=10.0):
     return not any(running(pid) for pid in pids)
 
 
-def test_sigint_with_requests_in_flight_exits_cleanly(ros_context):
-    with _planner_process(ros_context) as (process, workers, client):
+def test_sigint_with_requests_in_flight_exits_cleanly(client_node):
+    with _planner_process(client_node) as (process, workers, client):
         futures = []
         for _ in range(40):
             futures.append(client.call_async(REQUEST))
@@ -111,10 +100,10 @@ def test_sigint_with_requests_in_flight_exits_cleanly(ros_context):
 
 
 @pytest.mark.parametrize("number", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
-def test_a_burst_of_requests_is_answered_whatever_the_signal(ros_context, number):
+def test_a_burst_of_requests_is_answered_whatever_the_signal(client_node, number):
     # The executor takes one request of a service at a time: most of a burst
     # still waits in the service when the signal comes right after it.
-    with _planner_process(ros_context) as (process, _, client):
+    with _planner_process(client_node) as (process, _, client):
         futures = [client.call_async(REQUEST) for _ in range(8)]
         process.send_signal(number)
         output, _ = process.communicate(timeout=60.0)
@@ -124,10 +113,10 @@ def test_a_burst_of_requests_is_answered_whatever_the_signal(ros_context, number
     assert all(r.success for r in answered), output
 
 
-def test_a_stop_signal_taken_by_another_thread_stops_the_planner(ros_context):
+def test_a_stop_signal_taken_by_another_thread_stops_the_planner(client_node):
     # The kernel hands a signal sent to a process to any of its threads that
     # does not block it; Python runs the handler in the main thread only.
-    with _planner_process(ros_context) as (process, _, _):
+    with _planner_process(client_node) as (process, _, _):
         tasks = pathlib.Path(f"/proc/{process.pid}/task")
         dds = [int(t.name) for t in tasks.iterdir() if (t / "comm").read_text().startswith("dds.")]
         assert dds, "no DDS thread found"
@@ -136,8 +125,8 @@ def test_a_stop_signal_taken_by_another_thread_stops_the_planner(ros_context):
     assert process.returncode == 0, output
 
 
-def test_plan_workers_end_when_the_planner_is_killed(ros_context):
-    with _planner_process(ros_context) as (process, workers, _):
+def test_plan_workers_end_when_the_planner_is_killed(client_node):
+    with _planner_process(client_node) as (process, workers, _):
         process.kill()
         process.communicate(timeout=60.0)
         assert _ended(workers), "plan workers outlived the killed planner"

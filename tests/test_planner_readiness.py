@@ -13,7 +13,7 @@ import subprocess
 import threading
 import time
 
-from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
+from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, rho1_slice
@@ -108,17 +108,13 @@ def test_requests_wait_for_the_warm_up_of_each_roadmap(ros_context, monkeypatch)
             node.destroy_node()
 
 
-def test_a_first_run_says_it_compiles_before_it_is_ready(ros_context, tmp_path):
+def test_a_first_run_says_it_compiles_before_it_is_ready(client_node, tmp_path):
     # An empty numba cache of its own: the planner process compiles every
     # kernel, as on a fresh clone.
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"))
     process = subprocess.Popen([str(PLANNER)], env=env, stdout=subprocess.PIPE,
                                stderr=subprocess.STDOUT, text=True)
-    node = Node("first_run_client", context=ros_context)
-    executor = SingleThreadedExecutor(context=ros_context)
-    executor.add_node(node)
-    spinner = threading.Thread(target=executor.spin, daemon=True)
-    spinner.start()
+    node = client_node
     try:
         field_msg, roadmap_msg = _roadmap_messages(1)
         node.create_publisher(NSolutionField, "field", LATCHED_QOS).publish(field_msg)
@@ -140,9 +136,6 @@ def test_a_first_run_says_it_compiles_before_it_is_ready(ros_context, tmp_path):
         if process.poll() is None:
             process.kill()
             process.communicate(timeout=TIMEOUT)
-        executor.shutdown()
-        spinner.join(timeout=10.0)
-        node.destroy_node()
     assert process.returncode == 0, output
     compiling = output.find("compiling the planner's kernels")
     assert compiling >= 0, output
