@@ -14,7 +14,7 @@ a valid joint path.  Same-aspect pairs are drawn in pose space with the tests'
 endpoints near a face of the box of legs, a tenth with both endpoint margins
 in [3e-3, 0.02], the rest uniform.  Each pair is planned
 
-* by the project's planner on the full roadmap (gate distances prepared and
+* by the project's planner on the full roadmap (its planning index mapped and
   kernels loaded before timing; smoothing on), its path re-checked by the
   reference's continuation and its legs against the box;
 * by OMPL's RRTConnect in pose space: (x, y) in [-50, 50]^2 times SO(2), the
@@ -65,9 +65,9 @@ from scipy.sparse.csgraph import dijkstra
 
 from bench_roadmap import eigenvalue_baseline  # bench/ is the script's folder
 from rpr3_gwr_core import GWRError, PAPER_GEOMETRY, Planner, PlanOptions
-from rpr3_gwr_core.io.cache import cached_roadmap
+from rpr3_gwr_core.io.cache import cached_planning
 from rpr3_gwr_core.paper import FULL_BASE_GRID, FULL_REFINEMENT
-from rpr3_gwr_core.planning import DEFAULT_CLEARANCE, DEFAULT_MIN_MARGIN, validate_path
+from rpr3_gwr_core.planning import DEFAULT_MIN_MARGIN, validate_path
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]
                        / "src" / "rpr3_gwr_core" / "test"))
@@ -471,12 +471,12 @@ def _emit(line):
 def _plan_project(pairs):
     """Plan every pair with the project's planner, re-check each path."""
     begin = time.perf_counter()
-    roadmap, _ = cached_roadmap(PAPER_GEOMETRY, FULL_BASE_GRID, refinement=FULL_REFINEMENT)
+    roadmap, index, _ = cached_planning(PAPER_GEOMETRY, FULL_BASE_GRID,
+                                        refinement=FULL_REFINEMENT)
     loaded = time.perf_counter() - begin
-    planner = Planner(roadmap)
-    planner.local.prepare(DEFAULT_CLEARANCE)
+    planner = Planner(roadmap, index)
     planner.warm_up()
-    _emit({"stage": "project planner set up (load, gate distances, warm-up)",
+    _emit({"stage": "project planner set up (load and map the index, warm-up)",
            "load_s": round(loaded, 2), "total_s": round(time.perf_counter() - begin, 2)})
     records, options = [], PlanOptions(smooth=True)
     for (start, start_pose), (goal, goal_pose) in pairs:
@@ -586,7 +586,7 @@ def main():
     count = len(pairs) if args.reference_pairs is None else min(args.reference_pairs, len(pairs))
     _emit(_shortest_paths(pairs[:count], project, ompl))
 
-    ours = _summary("rpr3-gwr (in process, gate distances prepared, smoothed)", project, kinds)
+    ours = _summary("rpr3-gwr (in process, index mapped, smoothed)", project, kinds)
     theirs = _summary(f"OMPL RRTConnect in pose space, simplified (limit {args.ompl_time} s)",
                       ompl, kinds)
     _emit(ours)

@@ -25,9 +25,8 @@ import time
 import numpy as np
 
 from rpr3_gwr_core import GWRError, PAPER_GEOMETRY, Planner, PlanOptions, build_roadmap
-from rpr3_gwr_core.io.cache import cached_roadmap
+from rpr3_gwr_core.io.cache import cached_planning
 from rpr3_gwr_core.paper import FULL_BASE_GRID, FULL_REFINEMENT, PAPER_GRID
-from rpr3_gwr_core.planning import DEFAULT_CLEARANCE
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]
                        / "src" / "rpr3_gwr_core" / "test"))
@@ -78,9 +77,9 @@ def main():
     print(json.dumps({"roadmap": "slice rho1 = 17", **_check(Planner(roadmap), pairs)}),
           flush=True)
 
-    roadmap, _ = cached_roadmap(PAPER_GEOMETRY, FULL_BASE_GRID, refinement=FULL_REFINEMENT)
-    planner = Planner(roadmap)
-    planner.prepare(DEFAULT_CLEARANCE)
+    roadmap, index, _ = cached_planning(PAPER_GEOMETRY, FULL_BASE_GRID,
+                                        refinement=FULL_REFINEMENT)
+    planner = Planner(roadmap, index)
     pairs = same_aspect_pairs(random_full_configurations(rng, 2 * args.pairs))[:args.pairs]
     print(json.dumps({"roadmap": "full 3-DOF", **_check(planner, pairs)}), flush=True)
 

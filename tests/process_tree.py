@@ -1,4 +1,4 @@
-"""Which processes another one forked, read from /proc (Linux)."""
+"""Which plan worker processes another one started, read from /proc (Linux)."""
 
 import os
 import pathlib
@@ -6,21 +6,19 @@ import time
 
 __all__ = ["children", "wait_for_children", "running"]
 
+_WORKER = b"rpr3_gwr_nodes.plan_workers"
+
 
 def children(parent=None):
-    """Running processes forked by ``parent`` (this process by default) that
-    run its program (the planner's plan workers), as a set of pids."""
+    """Running plan workers (:mod:`rpr3_gwr_nodes.plan_workers`) started by
+    ``parent`` (this process by default), as a set of pids."""
     parent = os.getpid() if parent is None else parent
-    try:
-        program = pathlib.Path(f"/proc/{parent}/cmdline").read_bytes()
-    except OSError:
-        return set()
     found = set()
     for stat in pathlib.Path("/proc").glob("[0-9]*/stat"):
         try:
             fields = stat.read_text().rsplit(")", 1)[1].split()
             if (fields[0] != "Z" and int(fields[1]) == parent
-                    and (stat.parent / "cmdline").read_bytes() == program):
+                    and _WORKER in (stat.parent / "cmdline").read_bytes().split(b"\0")):
                 found.add(int(stat.parent.name))
         except (OSError, ValueError, IndexError):
             continue  # a process that ended meanwhile

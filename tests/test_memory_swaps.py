@@ -24,7 +24,7 @@ from rclpy.parameter import Parameter
 from rclpy.parameter_client import AsyncParameterClient
 from rpr3_gwr_core.exceptions import GWRError
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, rho1_slice
-from rpr3_gwr_core.planning import NEVER, Planner, PlanOptions
+from rpr3_gwr_core.planning import NEVER, PlanningIndex, PlanOptions
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
 from rpr3_gwr_msgs.msg import Configuration
 from rpr3_gwr_msgs.srv import PlanPath
@@ -89,18 +89,23 @@ def _process(name, log):
 class _Swapper:
     """Sets the builder's rho1 and waits for the planner to answer from it."""
 
-    def __init__(self, node, planner):
+    def __init__(self, node, planner, log_path):
         self.planner = planner
+        self.log_path = log_path
         self.parameters = AsyncParameterClient(node, "roadmap_builder")
         self.plan = node.create_client(PlanPath, "plan_path")
         assert self.parameters.wait_for_services(timeout_sec=TIMEOUT), "no builder"
         assert self.plan.wait_for_service(timeout_sec=TIMEOUT), "no planner"
         self.stamp = None
+        self.roadmaps = 0
+
+    def _workers_started(self):
+        return self.log_path.read_text().count("plan worker(s) started")
 
     def swap(self, rho1):
         """Rebuild at ``rho1`` (None: the builder's first roadmap, at 17);
-        the pids of the plan workers forked with it, once the planner planned
-        on it."""
+        the pids of the plan workers started with it, once the planner
+        planned on it and they are ready."""
         workers = children(self.planner.pid)
         if rho1 is not None:
             result = _result(self.parameters.set_parameters([Parameter("rho1", value=rho1)]))
@@ -116,6 +121,13 @@ class _Swapper:
             time.sleep(0.05)
         self.stamp = stamp
         assert response.success, response.error_msg
+        # Each roadmap is planned on before the next is built: its workers
+        # are the planner's n-th set.
+        self.roadmaps += 1
+        while self._workers_started() < self.roadmaps:
+            assert time.monotonic() < deadline, \
+                f"the planner's workers never started: {self.log_path.read_text()[-3000:]}"
+            time.sleep(0.05)
         return wait_for_children(os.cpu_count(), earlier=workers, parent=self.planner.pid)
 
 
@@ -137,7 +149,7 @@ def test_forty_roadmap_swaps_leave_every_process_within_20_percent(client_node, 
     with open(log_path, "w") as log, \
             _process("roadmap_builder", log) as builder, \
             _process("planner", log) as planner:
-        swapper = _Swapper(client_node, planner)
+        swapper = _Swapper(client_node, planner, log_path)
         swapper.swap(None)
         begin = time.monotonic()
         sizes = []
@@ -198,10 +210,9 @@ def test_memory_a_thread_freed_goes_back_to_the_system():
     assert int(done.stdout) >= 24 * 1024, f"only {done.stdout.strip()} kB returned"
 
 
-def test_a_plan_error_from_a_worker_is_freed_with_its_last_reference():
-    planner = Planner(build_roadmap(PAPER_GEOMETRY, rho1_slice(step=0.5)))
-    planner.warm_up()
-    workers = PlanWorkers(planner, 1, TIMEOUT)
+def test_a_plan_error_from_a_worker_is_freed_with_its_last_reference(tmp_path):
+    roadmap = build_roadmap(PAPER_GEOMETRY, rho1_slice(step=0.5))
+    workers = PlanWorkers(roadmap, PlanningIndex.build(roadmap), 1, TIMEOUT, str(tmp_path))
     wrong_rho1 = ((14.0, 20.0, 25.0, D(29.47)), (14.0, 20.0, 25.0, D(96.13)))
     gc.collect()
     gc.disable()

@@ -6,7 +6,9 @@ Fast DDS and worker processes; the clients spin in an executor of their own."""
 
 import math
 import os
+import pathlib
 import signal
+import struct
 import threading
 import time
 
@@ -15,7 +17,7 @@ import pytest
 from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID
+from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID, rho1_slice
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
 from rpr3_gwr_msgs.msg import Configuration, NSolutionField, WorkspaceRoadmap
 from rpr3_gwr_msgs.srv import PlanPath
@@ -108,6 +110,7 @@ def loaded_planner(ros_context):
     workers = set()
     try:
         assert planner.ready.wait(60.0), "the planner got no roadmap"
+        assert planner.indexed.wait(120.0), "the planner's workers did not start"
         workers = wait_for_children(WORKERS, earlier)
         assert len(workers) == WORKERS, workers
         reference = None
@@ -179,30 +182,28 @@ def test_a_stopped_worker_holds_up_only_its_own_request(loaded_planner):
     _check("busy worker stopped", load, stopped_at, reference, second)
 
 
-class _LargeAnswers:
-    """A planner whose every answer is far larger than a pipe holds."""
+def test_a_worker_stopped_halfway_through_its_answer_is_found_hung(tmp_path):
+    """A worker stopped halfway through writing an answer: reading what came
+    must not wait for the rest for ever.  A plan's answer fits in one write
+    to the pipe, so the first half of a larger one is written into the
+    worker's own end of its answer pipe (through /proc) before it is
+    stopped."""
+    from rpr3_gwr_core.planning import PlanningIndex
+    from rpr3_gwr_nodes.plan_workers import PlanWorkers, WorkerFailed
 
-    def plan(self, start, goal, options, termination):
-        return np.zeros(1 << 20)
-
-
-def test_a_worker_stopped_halfway_through_its_answer_is_found_hung():
-    """The worker fills the answer pipe and waits for the node to read; it is
-    stopped there, with most of its answer unwritten.  Reading what came
-    must not wait for the rest for ever."""
-    import multiprocessing
-    import select
-
-    from rpr3_gwr_nodes.plan_workers import WorkerFailed, _Worker
-
-    worker = _Worker(multiprocessing.get_context("fork"), _LargeAnswers())
+    roadmap = build_roadmap(PAPER_GEOMETRY, rho1_slice(step=0.5))
+    workers = PlanWorkers(roadmap, PlanningIndex.build(roadmap), 1, ANSWER_TIMEOUT,
+                          str(tmp_path))
+    worker = workers._idle.popleft()
     try:
-        worker.send((None, None, None, None))
-        assert select.select([worker.answers], [], [], ANSWER_TIMEOUT)[0], "no answer began"
+        answer_fd = pathlib.Path(f"/proc/{worker.pid}/cmdline").read_bytes().split(b"\0")[4]
+        with open(f"/proc/{worker.pid}/fd/{int(answer_fd)}", "wb", buffering=0) as pipe:
+            pipe.write(struct.pack("<Q", 1 << 20) + bytes(1000))
         os.kill(worker.pid, signal.SIGSTOP)
         begin = time.monotonic()
         with pytest.raises(WorkerFailed, match="hung"):
             worker.receive(ANSWER_TIMEOUT)
         assert time.monotonic() - begin < ANSWER_TIMEOUT / 2
     finally:
-        worker.kill()
+        workers._retire(worker)
+        workers.close()

@@ -67,6 +67,7 @@ class PlannerUnderTest:
         self.thread = threading.Thread(target=self.executor.spin, daemon=True)
         self.thread.start()
         assert self.planner.ready.wait(60.0), "the planner got no roadmap"
+        assert self.planner.indexed.wait(120.0), "the planner's workers did not start"
         assert self.plan_client.wait_for_service(timeout_sec=TIMEOUT)
 
     def call(self, request, timeout=TIMEOUT):

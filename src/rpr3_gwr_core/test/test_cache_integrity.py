@@ -118,7 +118,23 @@ def _shift(patch):
     return np.where(patch > 0, patch + 1000, 0).astype(patch.dtype)
 
 
+def _past_the_nodes(indices):
+    indices[indices.size // 2] = np.iinfo(indices.dtype).max
+    return indices
+
+
+def _doubled(indptr):
+    return indptr * 2
+
+
+def _cut_short(distances):
+    return distances[:, :-1]
+
+
 ARRAY_DAMAGE = {
+    "index edges past the nodes": ("index_indices", _past_the_nodes),
+    "index offsets past its edges": ("index_indptr", _doubled),
+    "index gate distances cut short": ("index_distances", _cut_short),
     "margin signs flipped": ("margin", _negate),
     "margins NaN": ("margin", _nan),
     "poses zeroed": ("poses", _zero),

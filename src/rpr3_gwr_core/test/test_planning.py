@@ -2,8 +2,6 @@
 
 import json
 import math
-import os
-import signal
 import subprocess
 import sys
 
@@ -22,7 +20,7 @@ from rpr3_gwr_core.mechanisms.rpr3 import Geometry
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, rho1_slice
 from rpr3_gwr_core.planning.global_planning import feasibility, global_paths
 from rpr3_gwr_core.mechanisms.rpr3 import inverse_kinematics, singularity_margin
-from rpr3_gwr_core.planning.planner import PlanOptions, Planner
+from rpr3_gwr_core.planning.planner import DEFAULT_CLEARANCE, PlanOptions, Planner
 from rpr3_gwr_core.workspace.grid import Axis, Grid
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
 from rpr3_gwr_core.planning.segments import shortcut_path
@@ -123,10 +121,10 @@ def test_local_paths_cost_what_dijkstra_finds(planner, paper_roadmap, clearance)
     checked = 0
     for _ in range(12):
         start_patch, goal_patch = rng.choice(sorted(seg.patches), 2)
-        answer = feasibility(planner.index, start_patch, goal_patch)
+        answer = feasibility(planner.global_index, start_patch, goal_patch)
         if not answer.feasible:
             continue
-        path = global_paths(planner.index, start_patch, goal_patch)[0].patches
+        path = global_paths(planner.global_index, start_patch, goal_patch)[0].patches
         start_cell = int(rng.choice(seg.patches[path[0]].cells))
         goal_cell = int(rng.choice(seg.patches[path[-1]].cells))
         local = planner.local.plan(path, start_cell, goal_cell, clearance=clearance)
@@ -179,9 +177,9 @@ def test_smoothing_shortens_the_path_and_keeps_the_margin(planner):
 def test_between_aspects_is_infeasible_from_the_roadmap_alone(planner):
     start = planner.locate(Q1)
     goal = planner.locate(MODE_A)
-    answer = feasibility(planner.index, start.patch, goal.patch)
+    answer = feasibility(planner.global_index, start.patch, goal.patch)
     assert not answer.feasible and answer.reason == "other_aspect"
-    assert global_paths(planner.index, start.patch, goal.patch) == []
+    assert global_paths(planner.global_index, start.patch, goal.patch) == []
     with pytest.raises(InfeasiblePathError) as info:
         planner.plan(Q1, MODE_A)
     assert info.value.reason == "other_aspect"
@@ -359,14 +357,16 @@ def test_a_polyline_keeps_its_ends_and_turns():
     assert _turns(points).tolist() == [0, 2, 4, 6, 7]
 
 
-def test_gate_distances_are_kept_for_the_latest_clearances_only(paper_roadmap):
-    local = Planner(paper_roadmap).local
-    for clearance in (0.0, 0.01, 0.02, 0.03, 0.04, 0.02):
-        local.prepare(clearance)
-    assert list(local._to_gate) == [0.01, 0.03, 0.04, 0.02]
+def test_gate_distances_outside_the_index_are_kept_for_the_last_clearances_first_used(
+        paper_roadmap):
+    planner = Planner(paper_roadmap)
+    for clearance in (0.0, 0.01, 0.02, 0.03, 0.04, 0.05, 0.01):
+        planner.plan(Q1, Q2, PlanOptions(clearance=clearance))
+    assert planner.planning_index.clearances == (DEFAULT_CLEARANCE,)
+    assert list(planner.local._extra_fields) == [0.01, 0.03, 0.04, 0.05]
 
 
-# --- what a forked worker process needs (the planner node forks them) --------------------------
+# --- what a worker process needs (the planner node starts them) ----------------------------------
 
 _WARM_UP_CHECK = """
 import importlib, json, math, pkgutil
@@ -406,21 +406,3 @@ def test_warm_up_loads_every_kernel_a_plan_uses():
                          timeout=600)
     assert run.returncode == 0, run.stderr[-2000:]
     assert json.loads(run.stdout.splitlines()[-1]) == []
-
-
-def test_a_process_forked_while_the_planner_is_busy_can_plan(paper_roadmap):
-    planner = Planner(paper_roadmap)
-    planner.plan(Q1, Q2)
-    # Another thread inside the local planner's lock at the fork.
-    with planner.local._lock:
-        pid = os.fork()
-        if pid == 0:
-            signal.alarm(60)  # a deadlocked child dies of it
-            try:
-                # A new clearance takes the lock to set up its gate distances.
-                planner.plan(Q1, Q2, PlanOptions(clearance=0.031))
-                os._exit(0)
-            finally:
-                os._exit(1)
-    _, status = os.waitpid(pid, 0)
-    assert os.waitstatus_to_exitcode(status) == 0

@@ -4,47 +4,56 @@ The planner's compiled searches release the interpreter's lock, but its
 Python steps (locating the ends, setting up shortcuts and validations,
 timing) hold it: requests in several threads of one process take turns
 there, and a 2-core machine stayed a quarter idle under 8 clients.  Worker
-processes each hold the planner and plan whole requests in parallel; the
+processes each hold a planner and plan whole requests in parallel; the
 node's threads wait for them and convert their plans to messages.
 
-The workers are forked from the node's process once its planner is built,
-warmed up (every compiled kernel loaded: a child never needs numba's
-compiler lock, which another thread may have held at the fork) and its gate
-distances computed, so the children share the roadmap, the distances (copy
-on write) and the kernels.  The local planner's own lock is renewed in a
-child (:mod:`rpr3_gwr_core.planning.local_planning`), as requests may be
-using the planner in the node's threads meanwhile.  Workers never touch ROS.
-They ignore SIGINT (the node stops them once its requests are answered) and
-end when they find the node's process gone (killed, without a shutdown), so
-they do not outlive it holding the roadmap's memory.
+The roadmap and its planning index (gate distances included) are written
+once to a folder of the node's own, and the node and every worker map those
+files (:func:`rpr3_gwr_core.io.cache.map_planning_files`), so they share one
+copy of their pages.  Workers are started as new interpreters
+(``python -m rpr3_gwr_nodes.plan_workers``), never forked from the node: a
+fork would copy its DDS threads' sockets and the state of locks other
+threads held.  A worker loads its planner from the folder, warms it up
+(every compiled kernel loaded) and says it is ready; the node waits for all
+of them.  Workers never touch ROS.  They ignore SIGINT (the node stops them
+once its requests are answered) and end when they find the node's process
+gone (killed, without a shutdown), so they do not outlive it holding the
+roadmap's memory.  The folder is removed when the workers are closed; one
+left by a killed node is removed by the next node that starts workers.
 
 Each worker has pipes of its own and is handed one request at a time: with a
 task queue shared by all of them, a worker stopped (SIGSTOP, a debugger)
-while reading it kept the queue's lock and stalled every other worker.  Its
-answer is read as it arrives, length first, so that a worker stopped halfway
-through writing it is found hung like any other.  A worker is hung when its
-heartbeat, stamped by a thread of its own, is older than a few seconds: a
-stopped or dead process's threads stamp nothing, while a busy worker's thread
-goes on stamping however long its plan takes (the compiled searches release
-the interpreter's lock), so a long plan is not taken for a hang.  A hung
-worker is killed (SIGKILL ends a stopped process too), its request is given
-back to the caller to plan, and the other workers go on.  It is not replaced:
-what made it fail (a signal, a lack of memory, a bug) may fail a new one as
-well; the next roadmap forks a full set.
+while reading it kept the queue's lock and stalled every other worker.
+Messages go as pickles, each behind its length; answers are read as they
+arrive, so that a worker stopped halfway through writing one is found hung
+like any other.  A worker is hung when its heartbeat, stamped by a thread of
+its own into a file of the folder that both map, is older than a few
+seconds: a stopped or dead process's threads stamp nothing, while a busy
+worker's thread goes on stamping however long its plan takes (the compiled
+searches release the interpreter's lock), so a long plan is not taken for a
+hang (while a worker starts, loading compiled kernels can hold the
+interpreter's lock for seconds: the heartbeat may then be older).  A hung
+worker is killed (SIGKILL ends a stopped process too), its
+request is given back to the caller to plan, and the other workers go on.
+It is not replaced: what made it fail (a signal, a lack of memory, a bug) may
+fail a new one as well; the next roadmap starts a full set.
 """
 
 import collections
 import math
 import mmap
-import multiprocessing
 import os
 import pickle
+import re
 import select
+import shutil
 import signal
 import struct
+import subprocess
+import sys
+import tempfile
 import threading
 import time
-import warnings
 
 from rpr3_gwr_core.exceptions import PlanningTimeoutError
 
@@ -56,10 +65,14 @@ _BEAT_PERIOD = 0.1
 # Age of the last heartbeat that makes a worker hung [s]: many periods, as
 # a loaded machine may not run the heartbeat's thread for a while.
 _HANG_AFTER = 2.0
-# An answer's length ahead of it on the answer pipe, and the most read at once.
+# The same while a worker starts (module doc).
+_START_HANG_AFTER = 30.0
+# A message's length ahead of it on a pipe, and the most read at once.
 _LENGTH = struct.Struct("<Q")
 _STAMP = struct.Struct("d")
 _CHUNK = 1 << 20
+# A node's folder of planning files: ``planner-<pid>-<random>``.
+_FOLDER = re.compile(r"planner-(\d+)-[^/]+")
 
 
 class WorkersClosed(Exception):
@@ -73,35 +86,62 @@ class WorkerFailed(Exception):
 
 
 class PlanWorkers:
-    """Worker processes planning on one planner.
+    """Worker processes planning on one roadmap, and the node's planner on
+    the same mapped files.
 
     Parameters
     ----------
-    planner : rpr3_gwr_core.planning.Planner
-        Warmed up (:meth:`~rpr3_gwr_core.planning.Planner.warm_up`).
+    roadmap : Roadmap
+    index : PlanningIndex
+        The roadmap's, with the gate distances of the clearances the node
+        plans with.
     count : int
         Number of worker processes, 1 at least.
     timeout : float
-        Longest wait for a plan from a worker that keeps its heartbeat [s].
+        Longest wait for a worker to start, or for a plan from a worker
+        that keeps its heartbeat [s].
+    directory : str
+        Where the folder of planning files is made.
+    **planner_options
+        Keyword arguments of :class:`~rpr3_gwr_core.planning.Planner`
+        (``retries``, ``min_margin``, ...), the same in every process.
+
+    Attributes
+    ----------
+    planner : Planner
+        On the mapped files, warmed up: the node's own.
     """
 
-    def __init__(self, planner, count, timeout):
+    def __init__(self, roadmap, index, count, timeout, directory, **planner_options):
+        from rpr3_gwr_core.io.cache import map_planning_files, save_planning_files
+        from rpr3_gwr_core.planning import Planner
+
         self.timeout = timeout
         self._changed = threading.Condition()
         self._idle = collections.deque()
         self._closed = False
-        context = multiprocessing.get_context("fork")
+        self._count = count
+        os.makedirs(directory, exist_ok=True)
+        _remove_orphans(directory)
+        self.folder = tempfile.mkdtemp(prefix=f"planner-{os.getpid()}-", dir=directory)
         try:
-            with warnings.catch_warnings():
-                # Python 3.12 warns of any fork from a threaded process: the
-                # module doc says why this one is safe.
-                warnings.simplefilter("ignore", DeprecationWarning)
-                for _ in range(count):
-                    self._idle.append(_Worker(context, planner))
+            save_planning_files(self.folder, roadmap, index)
+            self.planner = Planner(*map_planning_files(self.folder), **planner_options)
+            self.planner.warm_up()
+            started = [_Worker(self.folder, k, planner_options) for k in range(count)]
+            self._idle.extend(started)
+            failures = []
+            for worker in started:
+                try:
+                    worker.wait_ready(timeout)
+                except WorkerFailed as exc:
+                    failures.append(str(exc))
+                    self._retire(worker)
+            if not self._count:
+                raise WorkerFailed("; ".join(failures))
         except BaseException:
             self.close()
             raise
-        self._count = count
 
     @property
     def count(self):
@@ -142,13 +182,16 @@ class PlanWorkers:
             del answer
 
     def close(self):
-        """Stop the workers once the plans asked of them are done; returns at once."""
+        """Stop the workers once the plans asked of them are done, and remove
+        the folder (the node's planner and busy workers keep their
+        mappings); returns at once."""
         with self._changed:
             self._closed = True
             idle, self._idle = list(self._idle), collections.deque()
             self._changed.notify_all()
         for worker in idle:
             worker.kill()
+        shutil.rmtree(self.folder, ignore_errors=True)
 
     def _take(self, termination):
         with self._changed:
@@ -173,51 +216,79 @@ class PlanWorkers:
     def _retire(self, worker):
         worker.kill()
         with self._changed:
+            if worker in self._idle:
+                self._idle.remove(worker)
             self._count -= 1
             if not self._count:
                 self._closed = True
             self._changed.notify_all()
 
 
-class _Worker:
-    """A worker process, the node's end of its pipe and its heartbeat."""
+def _remove_orphans(directory):
+    """Remove the planning folders of nodes no longer running."""
+    for name in os.listdir(directory):
+        match = _FOLDER.fullmatch(name)
+        if match and not os.path.exists(f"/proc/{match.group(1)}"):
+            shutil.rmtree(os.path.join(directory, name), ignore_errors=True)
 
-    def __init__(self, context, planner):
-        # A time.monotonic() stamp in a mapping of this worker's own: a
-        # block of multiprocessing's shared heap, freed with an earlier
-        # worker, could be handed out again while a process forked from it
-        # still stamps it.
-        self.beat = mmap.mmap(-1, _STAMP.size)
-        _STAMP.pack_into(self.beat, 0, time.monotonic())
+
+class _Worker:
+    """A worker process, the node's ends of its pipes and its heartbeat."""
+
+    def __init__(self, folder, number, planner_options):
+        beat_file = os.path.join(folder, f"beat-{number}")
+        with open(beat_file, "wb") as stream:
+            stream.write(_STAMP.pack(time.monotonic()))
+        with open(beat_file, "r+b") as stream:
+            self.beat = mmap.mmap(stream.fileno(), _STAMP.size)
         # Requests go down a pipe, answers come up another, read as they
         # arrive: a worker stopped halfway through writing a large answer
         # would leave a blocking read waiting for its end for ever.
-        requests, self.requests = context.Pipe(duplex=False)
+        requests, self.requests = os.pipe()
         self.answers, answering = os.pipe()
-        self.process = context.Process(target=_serve, daemon=True,
-                                       args=(planner, requests, answering, self.beat,
-                                             os.getpid()))
-        self.process.start()
+        try:
+            self.process = subprocess.Popen(
+                [sys.executable, "-m", __name__, str(requests), str(answering), beat_file,
+                 str(os.getpid())],
+                pass_fds=(requests, answering), stdin=subprocess.DEVNULL,
+                env=dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p)))
+        finally:
+            os.close(requests)
+            os.close(answering)
         self.pid = self.process.pid
-        requests.close()
-        os.close(answering)
+        self.send((folder, planner_options))
 
-    def send(self, request):
-        self.requests.send(request)
+    def wait_ready(self, timeout):
+        """Wait until the worker has loaded and warmed up its planner.
 
-    def receive(self, timeout):
-        """The worker's answer: ``(True, plan)`` or ``(False, exception)``."""
+        Raises
+        ------
+        WorkerFailed
+            If it hung, died, failed or took longer than ``timeout`` [s].
+        """
+        # Loading numba's kernels can hold the interpreter's lock, and so
+        # stop the heartbeat, for seconds.
+        ready, error = self.receive(timeout, hang_after=_START_HANG_AFTER)
+        if not ready:
+            raise WorkerFailed(f"plan worker {self.pid} could not load its planner: {error!r}")
+
+    def send(self, message):
+        _write(self.requests, message)
+
+    def receive(self, timeout, hang_after=_HANG_AFTER):
+        """The worker's answer: ``(True, plan)`` or ``(False, exception)``;
+        the worker is hung when its heartbeat is older than ``hang_after`` [s]."""
         deadline = time.monotonic() + timeout
         received = bytearray()
         size = None
         while size is None or len(received) < _LENGTH.size + size:
             if not select.select([self.answers], [], [], _BEAT_PERIOD)[0]:
                 silent = time.monotonic() - _STAMP.unpack_from(self.beat)[0]
-                if silent > _HANG_AFTER:
+                if silent > hang_after:
                     raise WorkerFailed(f"plan worker {self.pid} hung (stopped or dead): no "
                                        f"heartbeat for {silent:.1f} s")
                 if time.monotonic() > deadline:
-                    raise WorkerFailed(f"plan worker {self.pid} gave no plan within "
+                    raise WorkerFailed(f"plan worker {self.pid} gave no answer within "
                                        f"{timeout:g} s")
                 continue
             chunk = os.read(self.answers, _CHUNK)
@@ -230,35 +301,70 @@ class _Worker:
 
     def kill(self):
         self.process.kill()
-        self.process.join()
-        self.requests.close()
+        self.process.wait()
+        os.close(self.requests)
         os.close(self.answers)
         self.beat.close()
 
 
-def _serve(planner, requests, answers, beat, node_process):
+def _write(fd, message):
+    data = pickle.dumps(message, protocol=pickle.HIGHEST_PROTOCOL)
+    view = memoryview(_LENGTH.pack(len(data)) + data)
+    while view:
+        view = view[os.write(fd, view):]
+
+
+def _read_exactly(fd, size):
+    """``size`` bytes from a pipe, or None at its end."""
+    data = bytearray()
+    while len(data) < size:
+        chunk = os.read(fd, size - len(data))
+        if not chunk:
+            return None
+        data += chunk
+    return data
+
+
+def _serve(requests, answers, beat_file, node_process):
+    """A worker's life: load the planner the first message names, say so,
+    then answer requests until the node closes the pipe."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    with open(beat_file, "r+b") as stream:
+        beat = mmap.mmap(stream.fileno(), _STAMP.size)
     threading.Thread(target=_beat, args=(beat, node_process), daemon=True).start()
+    planner = None
     while True:
-        try:
-            start, goal, options, termination = requests.recv()
-        except EOFError:
+        length = _read_exactly(requests, _LENGTH.size)
+        if length is None:
             return
+        message = pickle.loads(_read_exactly(requests, _LENGTH.unpack(length)[0]))
         try:
-            answer = True, planner.plan(start, goal, options, termination)
+            if planner is None:
+                planner = _load_planner(*message)
+                answer = True, None
+            else:
+                answer = True, planner.plan(*message)
         except Exception as exc:  # the caller raises it
             answer = False, exc
-        data = pickle.dumps(answer, protocol=pickle.HIGHEST_PROTOCOL)
-        view = memoryview(_LENGTH.pack(len(data)) + data)
-        while view:
-            view = view[os.write(answers, view):]
+        _write(answers, answer)
+
+
+def _load_planner(folder, planner_options):
+    from rpr3_gwr_core.io.cache import map_planning_files
+    from rpr3_gwr_core.planning import Planner
+
+    planner = Planner(*map_planning_files(folder), **planner_options)
+    planner.warm_up()
+    return planner
 
 
 def _beat(beat, node_process):
-    # An orphan's parent is another process; its pipe would never close,
-    # as the other workers may hold copies of its end.
+    # An orphan's parent is another process (init): the node was killed.
     while os.getppid() == node_process:
         _STAMP.pack_into(beat, 0, time.monotonic())
         time.sleep(_BEAT_PERIOD)
     os._exit(0)
+
+
+if __name__ == "__main__":
+    _serve(int(sys.argv[1]), int(sys.argv[2]), sys.argv[3], int(sys.argv[4]))

@@ -11,11 +11,15 @@ knows the planner is ready when a request gets another answer (the node logs
 "planning on a new roadmap" then).
 
 Serves ``plan_path`` (rpr3_gwr_msgs/PlanPath) from a reentrant callback group
-on a multithreaded executor, so several requests run at once, each planned
-in one of ``plan_workers`` processes forked with the planner once it is
-ready (:mod:`.plan_workers`; in the node's own process until then, with
-``plan_workers`` 0, when a worker dies or hangs for the request it had, and
-for good once every worker did).  Every step of a
+on a multithreaded executor, so several requests run at once.  Once ready,
+the node builds the roadmap's planning index (the gate distances of its
+``clearance``: seconds on the full 3-DOF roadmap, during which requests are
+planned without it), writes both to a folder in the roadmap cache and starts
+``plan_workers`` processes that map them, as the node then does too
+(:mod:`.plan_workers`).  Requests are planned in the workers, or in the
+node's own process until they are ready, with ``plan_workers`` 0, when a
+worker dies or hangs for the request it had, and for good once every worker
+did.  Every step of a
 request, the conversion of the answer to messages included, runs inside the
 error mapping: an error of the core becomes the response's error code and
 message, anything else ``ERROR_INTERNAL``, and the node never dies on a
@@ -38,7 +42,9 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallb
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rpr3_gwr_core.exceptions import GWRError, InvalidInputError
-from rpr3_gwr_core.planning import DEFAULT_CLEARANCE, PlanOptions, Planner, Termination
+from rpr3_gwr_core.io.paths import default_cache_dir
+from rpr3_gwr_core.planning import (DEFAULT_CLEARANCE, PlanningIndex, PlanOptions, Planner,
+                                    Retries, Termination, planning_index)
 from rpr3_gwr_msgs.msg import GlobalPath, NSolutionField, PlatformPose, WorkspaceRoadmap
 from rpr3_gwr_msgs.srv import PlanPath
 from std_msgs.msg import Header
@@ -138,9 +144,32 @@ class PlannerNode(Node):
                         "the answer is the valid path found so far or ERROR_TIMEOUT [s]",
             floating_point_range=[FloatingPointRange(from_value=1e-3, to_value=3600.0)]))
         self.declare_parameter("plan_workers", _CORES, ParameterDescriptor(
-            description="Processes that plan requests, forked with each new roadmap and "
-                        "sharing it; 0 plans in the node's process",
+            description="Processes that plan requests, started with each new roadmap and "
+                        "mapping it; 0 plans in the node's process",
             integer_range=[IntegerRange(from_value=0, to_value=64, step=1)], read_only=True))
+        defaults = Retries()
+        self.declare_parameter("retry_global_paths", defaults.global_paths, ParameterDescriptor(
+            description="Global paths tried, shortest first, before a request fails",
+            integer_range=[IntegerRange(from_value=1, to_value=1000, step=1)], read_only=True))
+        self.declare_parameter("retry_repairs", defaults.repairs, ParameterDescriptor(
+            description="Local re-plans around a step the validator refused, per global path "
+                        "and clearance weight",
+            integer_range=[IntegerRange(from_value=0, to_value=100, step=1)], read_only=True))
+        self.declare_parameter("retry_split_shortcuts", defaults.split_shortcuts,
+                               ParameterDescriptor(
+            description="Refused shortcuts split into shorter ones before the cell path is "
+                        "restored (also corners put back when smoothing)",
+            integer_range=[IntegerRange(from_value=0, to_value=100, step=1)], read_only=True))
+        self.declare_parameter("detour_weight", defaults.detour_weight, ParameterDescriptor(
+            description="The paper's clearance weight w (cell cost 1 + w / d) of the paths "
+                        "tried when the shortest ones cannot be repaired",
+            floating_point_range=[FloatingPointRange(from_value=0.0, to_value=1000.0)],
+            read_only=True))
+        self._retries = Retries(
+            global_paths=self.get_parameter("retry_global_paths").value,
+            repairs=self.get_parameter("retry_repairs").value,
+            split_shortcuts=self.get_parameter("retry_split_shortcuts").value,
+            detour_weight=self.get_parameter("detour_weight").value)
         self._state = None
         self._messages = {}
         updates = MutuallyExclusiveCallbackGroup()
@@ -152,7 +181,11 @@ class PlannerNode(Node):
         self.marker_pub = self.create_publisher(MarkerArray, "planned_path_markers", 10)
         self.create_service(PlanPath, "plan_path", self._on_plan, qos_profile=SERVICE_QOS,
                             callback_group=ReentrantCallbackGroup())
+        # Set once a first roadmap is planned on.
         self.ready = threading.Event()
+        # Set once the latest roadmap's planning index is built and its
+        # workers started (or failed to).
+        self.indexed = threading.Event()
 
     @property
     def planner(self):
@@ -178,18 +211,19 @@ class PlannerNode(Node):
         # readiness looks like a hang.
         with numba_event.install_listener("numba:compile", _CompileNotice(self.get_logger())):
             try:
-                planner = Planner(roadmap_from_msgs(field, roadmap))
+                received = roadmap_from_msgs(field, roadmap)
+                # Ready at once: gate distances come with the full index, below.
+                planner = Planner(received, PlanningIndex.build(received),
+                                  retries=self._retries)
             except GWRError as exc:
                 self.get_logger().error(f"ignoring an inconsistent roadmap: {exc}")
                 return
+            del received
             self._messages.clear()
             try:
                 planner.warm_up()
-                warm = True
             except Exception as exc:  # a bug there must not take the node down
-                self.get_logger().error(f"the warm-up failed, planning in the node's process: "
-                                        f"{exc!r}")
-                warm = False
+                self.get_logger().error(f"the warm-up failed: {exc!r}")
         # One reference assignment: atomic for the service threads, and a
         # request keeps the state it started with.
         previous, self._state = self._state, _State(planner, roadmap.header.stamp)
@@ -198,36 +232,52 @@ class PlannerNode(Node):
             f"planning on a new roadmap (stamp {stamp.sec}.{stamp.nanosec:09d}): "
             f"{_describe(planner.roadmap.grid)}, {len(planner.roadmap.graph)} patches, ready in "
             f"{time.perf_counter() - start:.3f} s")
+        self.indexed.clear()
         self.ready.set()
         if previous is not None and previous.workers is not None:
             previous.workers.close()
         # The replaced state goes here, unless a request in flight still
-        # holds it; malloc would keep its pages (module memory), and the
-        # workers forked next would count them too.
-        del previous
+        # holds it; malloc would keep its pages (module memory).
+        del previous, planner
         release_free_memory()
-        # Without a warm-up, forked workers might need numba's compiler lock.
-        if warm:
-            self._start_workers(planner, stamp)
-
-    def _start_workers(self, planner, stamp):
-        """Fork the workers of a planner now in use, which then take its requests."""
-        count = self.get_parameter("plan_workers").value
-        if not count:
-            return
-        begin = time.perf_counter()
         try:
-            # Computed once here, the gate distances and node costs are shared
-            # with the workers.
-            planner.prepare(self.get_parameter("clearance").value)
-            workers = PlanWorkers(planner, count, _WORKER_TIMEOUT)
-        except Exception as exc:  # plans go on in this process
-            self.get_logger().error(f"no plan workers, planning in the node's process: {exc!r}")
+            self._start_workers(stamp)
+        finally:
+            self.indexed.set()
+
+    def _start_workers(self, stamp):
+        """Index the roadmap now in use and start the workers on it, which
+        then take its requests (or plan with the index here)."""
+        count = self.get_parameter("plan_workers").value
+        begin = time.perf_counter()
+        roadmap = self._state.planner.roadmap
+        try:
+            index = planning_index(roadmap, (self.get_parameter("clearance").value,),
+                                   retries=self._retries)
+        except Exception as exc:  # plans go on without the index
+            self.get_logger().error(f"the planning index failed: {exc!r}")
             return
+        state = None
+        if count:
+            try:
+                workers = PlanWorkers(roadmap, index, count, _WORKER_TIMEOUT,
+                                      os.path.join(default_cache_dir(), "planners"),
+                                      retries=self._retries)
+                state = _State(workers.planner, stamp, workers)
+            except Exception as exc:  # plans go on in this process
+                self.get_logger().error(f"no plan workers, planning in the node's process: "
+                                        f"{exc!r}")
+        if state is None:
+            state = _State(Planner(roadmap, index, retries=self._retries), stamp)
         # Updates are mutually exclusive: no other roadmap came meanwhile.
-        self._state = _State(planner, stamp, workers)
-        self.get_logger().info(f"{count} plan worker(s) ready in "
-                               f"{time.perf_counter() - begin:.3f} s")
+        # With workers, the node's planner reads the mapped files too, and
+        # the received roadmap's memory goes with the replaced state.
+        self._state = state
+        del roadmap, index, state
+        release_free_memory()
+        self.get_logger().info(
+            f"planning index ready, {self._state.workers.count if self._state.workers else 0} "
+            f"plan worker(s) started in {time.perf_counter() - begin:.3f} s")
 
     def _plan(self, state, start, goal, options, termination):
         """A plan from the state's workers, or from its planner here when it

@@ -8,12 +8,19 @@ Entries
 -------
 An entry is a folder named by :func:`cache_key` holding one ``.npy`` file per
 array of :func:`~rpr3_gwr_core.io.export.roadmap_arrays` (``links`` as
-``links_0``, ``links_1``, ...) and ``header.json``: the mechanism and grid
-documents, each array's dtype, shape and CRC-32, and a CRC-32 of the header
-itself.  It is written to a staging folder (``<key>.<random>.tmp``) and
-renamed into place, so a reader finds an entry whole or not at all: the full
-3-DOF roadmap's arrays (about 400 MB) are read and checked in about 0.2 s from
-the page cache, without the copies of a zip archive.
+``links_0``, ``links_1``, ...), one per array of the roadmap's planning index
+(:func:`~rpr3_gwr_core.planning.planning_index`, as ``index_<name>``), and
+``header.json``: the mechanism and grid documents, each array's dtype, shape
+and CRC-32, and a CRC-32 of the header itself.  It is written to a staging
+folder (``<key>.<random>.tmp``) and renamed into place, so a reader finds an
+entry whole or not at all.
+
+The arrays are mapped, copy on write, rather than read: processes that load
+one entry share its pages (the full 3-DOF roadmap's arrays and index, about
+0.6 GB), and nothing a process writes into them reaches the files or another
+process.  :func:`save_planning_files` and :func:`map_planning_files` write
+and map the same files outside the cache, for a roadmap that came from
+elsewhere (the planner node's, received as messages).
 
 Integrity
 ---------
@@ -53,6 +60,7 @@ in the way), the roadmap is built and returned without being stored, with a
 
 import hashlib
 import json
+import math
 import numbers
 import os
 import re
@@ -65,18 +73,22 @@ import zlib
 import numpy as np
 
 from ..exceptions import InvalidInputError
+from ..mechanisms import mechanism_from_dict
+from ..planning.index import INDEX_TYPES, PlanningIndex
+from ..planning.planner import planning_index
 from ..workspace import build_roadmap, refine
 from .export import FIELD_TYPES, FORMAT, VERSION, roadmap_arrays, roadmap_from_arrays
 from .paths import default_cache_dir
 
 __all__ = ["CacheWarning", "DEFAULT_MAX_BYTES", "STALE_STAGING_SECONDS", "default_cache_dir",
-           "default_max_bytes", "cache_key", "cached_roadmap"]
+           "default_max_bytes", "cache_key", "cached_roadmap", "cached_planning",
+           "save_planning_files", "map_planning_files"]
 
 # Bump when a change of the algorithms changes roadmaps, so old entries are not reused.
 ALGORITHM_REVISION = 5
 # Bump when the files of an entry change, so old entries are misses (evicted in
 # their turn) rather than damaged entries.
-ENTRY_LAYOUT = 2
+ENTRY_LAYOUT = 3
 
 DEFAULT_MAX_BYTES = 4 * 2**30
 """Default bound of the cache's entries [bytes]."""
@@ -86,6 +98,7 @@ STALE_STAGING_SECONDS = 600.0
 largest entry takes seconds."""
 
 _LINK_TYPE = "<i1"
+_INDEX_PREFIX = "index_"
 _MARGIN_SAMPLES = 4096
 _ENTRY_NAME = re.compile(r"[0-9a-f]{24}")
 _STAGING_NAME = re.compile(r"[0-9a-f]{24}\..+\.tmp")
@@ -163,6 +176,25 @@ def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=No
         When an entry is damaged (it is rebuilt) or the roadmap cannot be
         stored (it is returned all the same).
     """
+    roadmap, _, hit = cached_planning(mechanism, grid, cache_dir, progress, refinement,
+                                      max_bytes)
+    return roadmap, hit
+
+
+def cached_planning(mechanism, grid, cache_dir=None, progress=None, refinement=None,
+                    max_bytes=None):
+    """:func:`cached_roadmap` with the roadmap's planning index
+    (:func:`~rpr3_gwr_core.planning.planning_index`), built with it and
+    stored in its entry: a :class:`~rpr3_gwr_core.planning.Planner` given
+    both plans at once.
+
+    Returns
+    -------
+    roadmap : Roadmap
+    index : PlanningIndex
+    hit : bool
+        Whether they came from the cache.
+    """
     if max_bytes is None:
         max_bytes = default_max_bytes()
     elif isinstance(max_bytes, bool) or not isinstance(max_bytes, numbers.Integral) \
@@ -173,7 +205,7 @@ def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=No
     path = os.path.join(directory, key)
     if os.path.isdir(path):
         try:
-            roadmap = _load(path, mechanism, grid, refinement)
+            roadmap, index = _load(path, (mechanism, grid, refinement))
         except (InvalidInputError, OSError, ValueError) as exc:
             # Unless another process evicted it meanwhile: that is a plain miss.
             if os.path.isdir(path):
@@ -185,7 +217,7 @@ def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=No
                 os.utime(path)
             except OSError:  # a read-only cache still serves, its recency unrecorded
                 pass
-            return roadmap, True
+            return roadmap, index, True
     begin = time.perf_counter()
     if refinement is not None:
         grid = refine(mechanism, grid, refinement)
@@ -193,14 +225,48 @@ def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=No
     roadmap = build_roadmap(mechanism, grid, progress=progress)
     if refinement is not None:
         roadmap.timings["refine"] = refined
+    begin = time.perf_counter()
+    index = planning_index(roadmap)
+    roadmap.timings["index"] = time.perf_counter() - begin
     try:
-        _store(directory, key, roadmap)
+        _store(directory, key, roadmap, index)
     except OSError as exc:
         warnings.warn(f"the roadmap is not cached: cannot write the cache folder {directory} "
                       f"({exc})", CacheWarning, stacklevel=2)
     else:
         _evict(directory, path, max_bytes)
-    return roadmap, False
+    return roadmap, index, False
+
+
+def save_planning_files(folder, roadmap, index):
+    """Write a roadmap and its planning index into an existing empty folder,
+    as a cache entry's files (module doc).
+
+    Raises
+    ------
+    OSError
+        If they cannot be written.
+    """
+    _save(folder, roadmap, index)
+
+
+def map_planning_files(folder):
+    """The roadmap and planning index of :func:`save_planning_files` (or of
+    a cache entry), mapped copy on write and checked as a cache entry is.
+
+    Returns
+    -------
+    roadmap : Roadmap
+    index : PlanningIndex
+
+    Raises
+    ------
+    InvalidInputError
+        If the files are damaged (naming what failed).
+    OSError
+        If they cannot be read.
+    """
+    return _load(folder)
 
 
 def _checksum(data):
@@ -210,12 +276,12 @@ def _checksum(data):
     return zlib.crc32(json.dumps(data, sort_keys=True, separators=(",", ":")).encode())
 
 
-def _store(directory, key, roadmap):
+def _store(directory, key, roadmap, index):
     """Write an entry through a staging folder; raises OSError if it cannot."""
     os.makedirs(directory, exist_ok=True)
     staging = tempfile.mkdtemp(dir=directory, prefix=key + ".", suffix=".tmp")
     try:
-        _save(staging, roadmap)
+        _save(staging, roadmap, index)
         os.rename(staging, os.path.join(directory, key))
     except OSError:
         shutil.rmtree(staging, ignore_errors=True)
@@ -224,12 +290,14 @@ def _store(directory, key, roadmap):
             raise
 
 
-def _save(folder, roadmap):
+def _save(folder, roadmap, index):
     arrays = roadmap_arrays(roadmap)
     named = {name: np.ascontiguousarray(arrays[name], dtype=dtype)
              for name, dtype in FIELD_TYPES.items()}
     named.update({f"links_{k}": np.ascontiguousarray(match, dtype=_LINK_TYPE)
                   for k, match in enumerate(arrays["links"])})
+    named.update({_INDEX_PREFIX + name: np.ascontiguousarray(array, dtype=INDEX_TYPES[name])
+                  for name, array in index.arrays().items()})
     listing = {}
     for name, array in named.items():
         np.save(os.path.join(folder, name + ".npy"), array)
@@ -242,27 +310,56 @@ def _save(folder, roadmap):
         json.dump(header, stream)
 
 
-def _load(folder, mechanism, grid, refinement):
-    """The roadmap of an entry (module doc); raises InvalidInputError naming
-    what failed, or OSError."""
+def _load(folder, expected=None):
+    """The roadmap and planning index of an entry (module doc), which must
+    be of ``expected = (mechanism, grid, refinement)`` when given; raises
+    InvalidInputError naming what failed, or OSError."""
     with open(os.path.join(folder, "header.json"), encoding="utf-8") as stream:
         try:
             header = json.load(stream)
         except ValueError as exc:
             raise InvalidInputError(f"header.json is not JSON: {exc}") from exc
-    _check_header(header, mechanism, grid, refinement)
+    _check_header(header, expected)
     arrays = {name: _read(folder, name, spec) for name, spec in header["arrays"].items()}
-    _check_values(mechanism, arrays)
+    index = {name[len(_INDEX_PREFIX):]: arrays.pop(name) for name in list(arrays)
+             if name.startswith(_INDEX_PREFIX)}
     arrays["links"] = [arrays.pop(f"links_{k}")
-                       for k in range(len(header["arrays"]) - len(FIELD_TYPES))]
-    return roadmap_from_arrays(header["mechanism"], header["grid"], arrays)
+                       for k in range(len(arrays) - len(FIELD_TYPES))]
+    try:
+        mechanism = mechanism_from_dict(header["mechanism"])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise InvalidInputError(f"header.json names no mechanism: {exc}") from exc
+    _check_values(mechanism, arrays)
+    roadmap = roadmap_from_arrays(header["mechanism"], header["grid"], arrays)
+    return roadmap, PlanningIndex.from_arrays(roadmap, index)
 
 
-def _check_header(header, mechanism, grid, refinement):
+def _check_header(header, expected):
     if not isinstance(header, dict) or set(header) != {"mechanism", "grid", "arrays", "checksum"}:
         raise InvalidInputError("header.json is not an entry's header")
     if header["checksum"] != _checksum({k: v for k, v in header.items() if k != "checksum"}):
         raise InvalidInputError("header.json fails its checksum")
+    if expected is not None:
+        _check_names(header, *expected)
+    listing = header["arrays"]
+    index_names = {_INDEX_PREFIX + name: dtype for name, dtype in INDEX_TYPES.items()}
+    n_links = len(listing) - len(FIELD_TYPES) - len(index_names) \
+        if isinstance(listing, dict) else 0
+    types = dict(FIELD_TYPES, **index_names,
+                 **{f"links_{k}": _LINK_TYPE for k in range(n_links)})
+    if n_links < 1 or set(listing) != set(types):
+        raise InvalidInputError("header.json lists other arrays than a roadmap's and its index's")
+    for name, spec in listing.items():
+        if (not isinstance(spec, dict) or set(spec) != {"dtype", "shape", "crc32"}
+                or spec["dtype"] != np.dtype(types[name]).str
+                or not isinstance(spec["shape"], list)
+                or not all(type(n) is int and n >= 0 for n in spec["shape"])
+                or type(spec["crc32"]) is not int):
+            raise InvalidInputError(f"header.json lists {name} wrongly")
+
+
+def _check_names(header, mechanism, grid, refinement):
+    """That an entry's header names the mechanism and grid asked for."""
     if _checksum(header["mechanism"]) != _checksum(mechanism.to_dict()):
         raise InvalidInputError("header.json names another mechanism")
     stored = header["grid"]
@@ -274,22 +371,11 @@ def _check_header(header, mechanism, grid, refinement):
                 and _checksum(stored.get("base")) == _checksum(grid.to_dict()))
     if not same:
         raise InvalidInputError("header.json names another grid")
-    listing = header["arrays"]
-    n_links = len(listing) - len(FIELD_TYPES) if isinstance(listing, dict) else 0
-    types = dict(FIELD_TYPES, **{f"links_{k}": _LINK_TYPE for k in range(n_links)})
-    if n_links < 1 or set(listing) != set(types):
-        raise InvalidInputError("header.json lists other arrays than a roadmap's")
-    for name, spec in listing.items():
-        if (not isinstance(spec, dict) or set(spec) != {"dtype", "shape", "crc32"}
-                or spec["dtype"] != np.dtype(types[name]).str
-                or not isinstance(spec["shape"], list)
-                or not all(type(n) is int and n >= 0 for n in spec["shape"])
-                or type(spec["crc32"]) is not int):
-            raise InvalidInputError(f"header.json lists {name} wrongly")
 
 
 def _read(folder, name, spec):
-    """An array of an entry, checked against its header ``spec``."""
+    """An array of an entry, mapped copy on write (module doc) and checked
+    against its header ``spec``."""
     with open(os.path.join(folder, name + ".npy"), "rb") as stream:
         version = np.lib.format.read_magic(stream)
         readers = {(1, 0): np.lib.format.read_array_header_1_0,
@@ -300,12 +386,17 @@ def _read(folder, name, spec):
         if dtype.str != spec["dtype"] or list(shape) != spec["shape"] or fortran_order:
             raise InvalidInputError(f"{name}.npy holds {dtype.str} {shape}, the header lists "
                                     f"{spec['dtype']} {tuple(spec['shape'])}")
-        array = np.empty(shape, dtype)
-        raw = array.reshape(-1).view(np.uint8)
-        # Sized before reading, so a wrong header never makes a huge read.
-        if os.fstat(stream.fileno()).st_size - stream.tell() != raw.size \
-                or stream.readinto(raw) != raw.size:
-            raise InvalidInputError(f"{name}.npy is not {raw.size} bytes of data")
+        size = dtype.itemsize * math.prod(shape)
+        # Sized before mapping, so a wrong header never maps past the file's end.
+        if os.fstat(stream.fileno()).st_size - stream.tell() != size:
+            raise InvalidInputError(f"{name}.npy is not {size} bytes of data")
+        if size == 0:
+            array = np.empty(shape, dtype)
+        else:
+            # A plain ndarray on the mapping (which it keeps open): compiled
+            # kernels are typed for plain, writable arrays.
+            array = np.memmap(stream, dtype, mode="c", offset=stream.tell(),
+                              shape=shape).view(np.ndarray)
     if _checksum(array) != spec["crc32"]:
         raise InvalidInputError(f"{name}.npy fails its checksum")
     return array

@@ -16,7 +16,7 @@ from ..planning import NEVER, PlanOptions, Planner, Termination
 from ..workspace import Grid, build_roadmap
 from ..workspace.cusps import cusp_curves, find_cusps
 from ..workspace.grid import check_roadmap_grid
-from .cache import cached_roadmap
+from .cache import cached_planning, cached_roadmap
 from .cli import MAX_LEG
 
 __all__ = ["run"]
@@ -69,8 +69,9 @@ def _dk(args):
 
 
 def _full_roadmap(cache_dir):
-    return cached_roadmap(PAPER_GEOMETRY, FULL_BASE_GRID, cache_dir, _Progress(sys.stderr),
-                          refinement=FULL_REFINEMENT)
+    """The full 3-DOF roadmap, its planning index, and whether they came from the cache."""
+    return cached_planning(PAPER_GEOMETRY, FULL_BASE_GRID, cache_dir, _Progress(sys.stderr),
+                           refinement=FULL_REFINEMENT)
 
 
 def _roadmap(args):
@@ -81,7 +82,7 @@ def _roadmap(args):
         if args.field_figure:
             raise InvalidInputError("--field-figure draws 2-D grids: with --full use "
                                     "--slice-figure")
-        roadmap, hit = _full_roadmap(args.cache_dir)
+        roadmap, _, hit = _full_roadmap(args.cache_dir)
     else:
         if args.slice_figure:
             raise InvalidInputError("--slice-figure needs --full")
@@ -136,12 +137,13 @@ def _plan(args):
                           max_velocity=args.max_velocity, max_acceleration=args.max_acceleration,
                           mode_tol=math.radians(args.alpha_tol_deg))
     if args.full:
-        roadmap, _ = _full_roadmap(args.cache_dir)
+        roadmap, index, _ = _full_roadmap(args.cache_dir)
         start, goal = tuple(args.start), tuple(args.goal)
         roadmap_doc = {"mechanism": PAPER_GEOMETRY.to_dict(), "full": True}
     else:
         grid = rho1_slice(args.rho1)
-        roadmap, _ = cached_roadmap(PAPER_GEOMETRY, grid, args.cache_dir, _Progress(sys.stderr))
+        roadmap, index, _ = cached_planning(PAPER_GEOMETRY, grid, args.cache_dir,
+                                            _Progress(sys.stderr))
         start, goal = (args.rho1, *args.start), (args.rho1, *args.goal)
         roadmap_doc = {"mechanism": PAPER_GEOMETRY.to_dict(), "grid": grid.to_dict()}
     start = (*start[:3], math.radians(start[3]))
@@ -149,7 +151,7 @@ def _plan(args):
     header = {"roadmap": roadmap_doc, "request": {"start": list(start), "goal": list(goal)}}
     begin = time.perf_counter()
     try:
-        planner = Planner(roadmap)
+        planner = Planner(roadmap, index)
         termination = NEVER if args.time_limit is None else Termination.after(args.time_limit)
         result = dict(header, **planner.plan(start, goal, options, termination).to_dict())
         code = 0

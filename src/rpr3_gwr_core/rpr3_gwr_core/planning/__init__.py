@@ -2,13 +2,15 @@
 shortcutting, smoothing, timing and the independent validator."""
 
 from .global_planning import Feasibility, GlobalPath, RoadmapIndex, feasibility, global_paths
+from .index import PlanningIndex
 from .locate import Location, locate
-from .planner import DEFAULT_CLEARANCE, Plan, PlanOptions, Planner, Retries
+from .planner import DEFAULT_CLEARANCE, Plan, PlanOptions, Planner, Retries, planning_index
 from .termination import NEVER, Termination
 from .trajectory import time_parameterize
 from .validation import DEFAULT_MAX_STEP, DEFAULT_MIN_MARGIN, Validation, validate_path
 
 __all__ = ["Feasibility", "GlobalPath", "RoadmapIndex", "feasibility", "global_paths",
+           "PlanningIndex", "planning_index",
            "Location", "locate", "DEFAULT_CLEARANCE", "Plan", "PlanOptions", "Planner", "Retries",
            "Termination", "NEVER",
            "time_parameterize",

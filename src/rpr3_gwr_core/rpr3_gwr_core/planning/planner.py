@@ -21,6 +21,7 @@ import numpy as np
 from ..exceptions import (GWRError, InfeasiblePathError, InvalidInputError, PlanningTimeoutError,
                           ValidationError)
 from .global_planning import RoadmapIndex, feasibility, global_paths, longer_paths
+from .index import PlanningIndex
 from .local_planning import DEFAULT_CLEARANCE_WEIGHT, LocalPlanner
 from .locate import DEFAULT_MODE_TOL, locate
 from .segments import segments_clear, shortcut_path
@@ -28,7 +29,7 @@ from .termination import NEVER
 from .trajectory import corner_cuts, cut_corners, time_parameterize
 from .validation import DEFAULT_MAX_STEP, DEFAULT_MIN_MARGIN, validate_path
 
-__all__ = ["PlanOptions", "Plan", "Planner", "Retries"]
+__all__ = ["PlanOptions", "Plan", "Planner", "Retries", "planning_index"]
 
 # Margin [normalised |det Jx|] that paths keep from the singular locus
 # wherever the roadmap allows.
@@ -197,12 +198,30 @@ def _location_dict(location):
             "patch": location.patch, "cell": location.cell, "margin": location.margin}
 
 
+def planning_index(roadmap, clearances=(DEFAULT_CLEARANCE,),
+                   clearance_weight=DEFAULT_CLEARANCE_WEIGHT, retries=Retries()):
+    """The :class:`~.index.PlanningIndex` of a roadmap with the gate distances
+    of ``clearances`` and the node costs of every clearance weight a
+    :class:`Planner` with these ``clearance_weight`` and ``retries`` plans
+    with (seconds on the full 3-DOF roadmap)."""
+    return PlanningIndex.build(roadmap, clearances, (clearance_weight, retries.detour_weight))
+
+
 class Planner:
     """Plans on one roadmap.
+
+    Everything a plan reads is built when the planner is made, or given:
+    the roadmap and its planning index.  A plan changes nothing but the
+    lookups of clearances and weights the index lacks, computed on first
+    use, so one planner serves requests in several threads at once.
 
     Parameters
     ----------
     roadmap : Roadmap
+    index : PlanningIndex, optional
+        The roadmap's, built or mapped (:mod:`~rpr3_gwr_core.io.cache`);
+        by default :func:`planning_index` of the roadmap, with this
+        planner's weights.
     clearance_weight : float
         The paper's boundary cost weight of the local planner (0: shortest
         paths).
@@ -214,14 +233,17 @@ class Planner:
         How hard a plan tries before it fails.
     """
 
-    def __init__(self, roadmap, clearance_weight=DEFAULT_CLEARANCE_WEIGHT,
+    def __init__(self, roadmap, index=None, clearance_weight=DEFAULT_CLEARANCE_WEIGHT,
                  min_margin=DEFAULT_MIN_MARGIN, max_step=DEFAULT_MAX_STEP, retries=Retries()):
         self.roadmap = roadmap
         self.retries = retries
         if not (math.isfinite(clearance_weight) and clearance_weight >= 0):
             raise InvalidInputError("clearance_weight must be finite and non-negative")
-        self.index = RoadmapIndex(roadmap)
-        self.local = LocalPlanner(roadmap)
+        if index is None:
+            index = planning_index(roadmap, clearance_weight=clearance_weight, retries=retries)
+        self.planning_index = index
+        self.global_index = RoadmapIndex(roadmap)
+        self.local = LocalPlanner(roadmap, index)
         self.clearance_weight = float(clearance_weight)
         self.min_margin = float(min_margin)
         self.max_step = float(max_step)
@@ -236,9 +258,6 @@ class Planner:
         request: a plan inside the first patch, smoothed and timed, and a
         segment test for the corners that plan may not have.
 
-        A process forked afterwards finds them loaded, and never needs
-        numba's compiler lock, which another thread of the parent may have
-        held at the fork.
         """
         seg = self.roadmap.segmentation
         patch = seg.patches[min(seg.patches)]
@@ -254,13 +273,6 @@ class Planner:
             pass  # the kernels it reached are loaded all the same
         joints = self._joints[cells]
         self._clear(joints[:1], joints[1:], [patch.id], [0.0])
-
-    def prepare(self, clearance=DEFAULT_CLEARANCE):
-        """Compute now what plans with this clearance otherwise compute on
-        first use: every patch's distances to its gates and its node costs
-        for the clearance weights the planner tries (seconds on the full
-        3-DOF roadmap)."""
-        self.local.prepare(clearance, self._weights())
 
     def locate(self, configuration, mode_tol=DEFAULT_MODE_TOL):
         """:func:`~rpr3_gwr_core.planning.locate.locate` of a configuration:
@@ -298,14 +310,15 @@ class Planner:
         """
         s = self.locate(start, options.mode_tol)
         g = self.locate(goal, options.mode_tol)
-        answer = feasibility(self.index, s.patch, g.patch)
+        answer = feasibility(self.global_index, s.patch, g.patch)
         if not answer.feasible:
             error = InfeasiblePathError(
                 f"no path from patch {s.patch} to patch {g.patch}: "
                 f"{answer.reason.replace('_', ' ')}")
             error.reason = answer.reason
             raise error
-        paths = global_paths(self.index, s.patch, g.patch, options.weighted, options.max_paths)
+        paths = global_paths(self.global_index, s.patch, g.patch, options.weighted,
+                             options.max_paths)
         if options.feasibility_only:
             mechanism = self.roadmap.mechanism
             return Plan(True, answer.reason, s, g, paths,
@@ -356,7 +369,7 @@ class Planner:
         most = self.retries.global_paths
         yield from paths[:most]
         listed = {p.patches for p in paths}
-        extra = (p for p in longer_paths(self.index, start_patch, goal_patch)
+        extra = (p for p in longer_paths(self.global_index, start_patch, goal_patch)
                  if p.patches not in listed)
         for path in itertools.islice(extra, max(0, most - len(paths))):
             paths.append(path)

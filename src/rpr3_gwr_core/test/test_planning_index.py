@@ -1,0 +1,107 @@
+"""The planning index: built once, saved with the cache, mapped by a fresh
+process, and planning there exactly as a planner that built its own."""
+
+import json
+import math
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+from rpr3_gwr_core import PAPER_GEOMETRY
+from rpr3_gwr_core.exceptions import InvalidInputError
+from rpr3_gwr_core.io.cache import cached_planning
+from rpr3_gwr_core.paper import rho1_slice
+from rpr3_gwr_core.planning import DEFAULT_CLEARANCE, PlanningIndex, PlanOptions, Planner
+
+D = math.radians
+GRID = rho1_slice(rho1=17, step=0.25)
+# The paper's first example, and an assembly-mode change.
+PAIRS = [((17, 12, 18, D(122.82)), (17, 10, 25, D(-24.24))),
+         ((17, 20, 25, D(29.47)), (17, 20, 25, D(96.13)))]
+
+
+@pytest.fixture(scope="module")
+def cached(tmp_path_factory):
+    """A cache folder with the slice's entry, and the roadmap and index it stored."""
+    folder = str(tmp_path_factory.mktemp("cache"))
+    roadmap, index, hit = cached_planning(PAPER_GEOMETRY, GRID, folder)
+    assert not hit
+    return folder, roadmap, index
+
+
+def test_the_index_holds_the_default_clearance_and_the_detour_weight(cached):
+    _, roadmap, index = cached
+    assert index.clearances == (DEFAULT_CLEARANCE,)
+    assert index.weights == (Planner(roadmap, index).retries.detour_weight,)
+
+
+def test_a_loaded_index_equals_the_built_one(cached):
+    folder, _, built = cached
+    roadmap, loaded, hit = cached_planning(PAPER_GEOMETRY, GRID, folder)
+    assert hit
+    for name, array in built.arrays().items():
+        np.testing.assert_array_equal(loaded.arrays()[name], array, err_msg=name)
+
+
+def test_an_index_without_gate_distances_plans_the_same(cached):
+    """Computed on first use, patch by patch, the distances give the same plans."""
+    _, roadmap, index = cached
+    bare = Planner(roadmap, PlanningIndex.build(roadmap))
+    full = Planner(roadmap, index)
+    for start, goal in PAIRS:
+        for options in (PlanOptions(), PlanOptions(smooth=True, clearance=0.05)):
+            np.testing.assert_array_equal(bare.plan(start, goal, options).joints,
+                                          full.plan(start, goal, options).joints)
+
+
+def test_an_index_is_refused_for_another_roadmap(cached):
+    _, _, index = cached
+    from rpr3_gwr_core import build_roadmap
+
+    other = build_roadmap(PAPER_GEOMETRY, rho1_slice(rho1=14, step=0.25))
+    with pytest.raises(InvalidInputError):
+        PlanningIndex.from_arrays(other, index.arrays())
+
+
+@pytest.mark.parametrize("values", [(-0.1,), (1.0,), (math.nan,)])
+def test_clearances_out_of_range_are_refused(cached, values):
+    _, roadmap, _ = cached
+    with pytest.raises(InvalidInputError):
+        PlanningIndex.build(roadmap, clearances=values)
+
+
+_FRESH_PROCESS = textwrap.dedent("""
+    import json, sys
+    from rpr3_gwr_core import PAPER_GEOMETRY
+    from rpr3_gwr_core.io.cache import cached_planning
+    from rpr3_gwr_core.paper import rho1_slice
+    from rpr3_gwr_core.planning import Planner
+
+    roadmap, index, hit = cached_planning(PAPER_GEOMETRY, rho1_slice(rho1=17, step=0.25),
+                                          sys.argv[1])
+    with open("/proc/self/maps") as maps:
+        mapped = sorted({line.split()[-1].rsplit("/", 1)[-1] for line in maps
+                         if sys.argv[1] in line})
+    planner = Planner(roadmap, index)
+    plans = [planner.plan(*pair).joints.tolist() for pair in json.loads(sys.argv[2])]
+    print(json.dumps({"hit": hit, "mapped": mapped, "plans": plans,
+                      "computed": list(planner.local._extra_fields)}))
+""")
+
+
+def test_a_fresh_process_plans_from_the_mapped_index(cached):
+    folder, roadmap, index = cached
+    run = subprocess.run([sys.executable, "-c", _FRESH_PROCESS, folder, json.dumps(PAIRS)],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-3000:]
+    answer = json.loads(run.stdout.splitlines()[-1])
+    assert answer["hit"] and answer["computed"] == []
+    # Mapped, not read, and not computed: the index's largest arrays are
+    # the files of the entry.
+    assert {"index_distances.npy", "index_indices.npy", "poses.npy"} <= set(answer["mapped"])
+    reference = Planner(roadmap, index)
+    for (start, goal), joints in zip(PAIRS, answer["plans"]):
+        np.testing.assert_array_equal(np.array(joints), reference.plan(start, goal).joints)
