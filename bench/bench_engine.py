@@ -3,7 +3,7 @@
 Run on demand, after ``source ros2_ws/env.sh``:
 
     python bench/bench_engine.py [--pairs 250] [--seed 1] [--ompl-time 1.0]
-                                 [--reference-pairs N] [--repeat 3]
+                                 [--reference-pairs N] [--repeat 3] [--clearance 0.02]
 
 The pose space is the independent reference: inverse kinematics of the 3-RPR
 is unique, so (x, y, alpha) is the configuration space, and a pose path that
@@ -67,7 +67,7 @@ from bench_roadmap import eigenvalue_baseline  # bench/ is the script's folder
 from rpr3_gwr_core import GWRError, PAPER_GEOMETRY, Planner, PlanOptions
 from rpr3_gwr_core.io.cache import cached_planning
 from rpr3_gwr_core.paper import FULL_BASE_GRID, FULL_REFINEMENT
-from rpr3_gwr_core.planning import DEFAULT_MIN_MARGIN, validate_path
+from rpr3_gwr_core.planning import DEFAULT_CLEARANCE, DEFAULT_MIN_MARGIN, validate_path
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]
                        / "src" / "rpr3_gwr_core" / "test"))
@@ -468,7 +468,7 @@ def _emit(line):
     print(json.dumps(line), flush=True)
 
 
-def _plan_project(pairs):
+def _plan_project(pairs, clearance):
     """Plan every pair with the project's planner, re-check each path."""
     begin = time.perf_counter()
     roadmap, index, _ = cached_planning(PAPER_GEOMETRY, FULL_BASE_GRID,
@@ -478,7 +478,7 @@ def _plan_project(pairs):
     planner.warm_up()
     _emit({"stage": "project planner set up (load and map the index, warm-up)",
            "load_s": round(loaded, 2), "total_s": round(time.perf_counter() - begin, 2)})
-    records, options = [], PlanOptions(smooth=True)
+    records, options = [], PlanOptions(smooth=True, clearance=clearance)
     for (start, start_pose), (goal, goal_pose) in pairs:
         begin = time.perf_counter()
         try:
@@ -561,6 +561,9 @@ def main():
                         help="OMPL's time limit per pair, simplification included [s]")
     parser.add_argument("--reference-pairs", type=int, default=None,
                         help="shortest paths for the first N pairs only (default: all)")
+    parser.add_argument("--clearance", type=float, default=DEFAULT_CLEARANCE,
+                        help="the planner's clearance (a larger margin from singularities, "
+                             "kept where the roadmap allows, makes paths longer)")
     parser.add_argument("--repeat", type=int, default=3,
                         help="runs of each fresh-process timing (median)")
     args = parser.parse_args()
@@ -581,7 +584,7 @@ def main():
         _emit({"fresh_process": f"rpr3-gwr {command}", "repeat": args.repeat,
                "median_s": round(seconds, 3), "over_baseline": round(seconds / baseline, 3)})
 
-    project = _plan_project(pairs)
+    project = _plan_project(pairs, args.clearance)
     ompl = _plan_ompl(pairs, args.seed, args.ompl_time)
     count = len(pairs) if args.reference_pairs is None else min(args.reference_pairs, len(pairs))
     _emit(_shortest_paths(pairs[:count], project, ompl))

@@ -77,6 +77,7 @@ from ..mechanisms import mechanism_from_dict
 from ..planning.index import INDEX_TYPES, PlanningIndex
 from ..planning.planner import planning_index
 from ..workspace import build_roadmap, refine
+from ..workspace.adaptive import grid_from_dict
 from .export import FIELD_TYPES, FORMAT, VERSION, roadmap_arrays, roadmap_from_arrays
 from .paths import default_cache_dir
 
@@ -327,9 +328,10 @@ def _load(folder, expected=None):
                        for k in range(len(arrays) - len(FIELD_TYPES))]
     try:
         mechanism = mechanism_from_dict(header["mechanism"])
+        grid = grid_from_dict(header["grid"])
     except (KeyError, TypeError, ValueError) as exc:
-        raise InvalidInputError(f"header.json names no mechanism: {exc}") from exc
-    _check_values(mechanism, arrays)
+        raise InvalidInputError(f"header.json names no mechanism or grid: {exc}") from exc
+    _check_values(mechanism, grid, arrays)
     roadmap = roadmap_from_arrays(header["mechanism"], header["grid"], arrays)
     return roadmap, PlanningIndex.from_arrays(roadmap, index)
 
@@ -402,12 +404,12 @@ def _read(folder, name, spec):
     return array
 
 
-def _check_values(mechanism, arrays):
+def _check_values(mechanism, grid, arrays):
     """The value ranges of an entry's arrays (module doc)."""
     slots, pose_size = mechanism.max_solutions, mechanism.pose_size
     count, poses, margin = arrays["count"], arrays["poses"], arrays["margin"]
     region, patch = arrays["region"], arrays["patch"]
-    n = count.shape[0] if count.ndim == 1 else -1
+    n = grid.size
     shapes = {"count": (n,), "poses": (n, slots, pose_size), "margin": (n, slots),
               "region": (n,), "patch": (n, slots)}
     if any(arrays[name].shape != shape for name, shape in shapes.items()):
@@ -432,7 +434,12 @@ def _check_values(mechanism, arrays):
     cells = solved[np.linspace(0, solved.size - 1, min(solved.size, _MARGIN_SAMPLES),
                                dtype=np.int64)]
     sample = (cells, np.arange(cells.size) % count[cells])
-    if not np.allclose(mechanism.margin(poses[sample]), margin[sample], rtol=1e-6, atol=1e-9):
+    joints = np.empty((cells.size, mechanism.n_joints))
+    joints[:, list(grid.axis_joints)] = grid.coordinates_of(cells)
+    for joint, value in grid.fixed:
+        joints[:, joint] = value
+    if not np.allclose(mechanism.margin(poses[sample], joints), margin[sample], rtol=1e-6,
+                       atol=1e-9):
         raise InvalidInputError("margins differ from the margins of their poses")
 
 

@@ -1,7 +1,9 @@
-"""Mechanisms: the interface the roadmap and the planner use, and the 3-RPR."""
+"""Mechanisms: the interface the roadmap and the planner use, the 3-RPR and
+the five-bar."""
 
 from .base import Mechanism, mechanism_from_dict, register_mechanism
+from .five_bar import DEFAULT_FIVE_BAR, FiveBar
 from .rpr3 import PAPER_GEOMETRY, Geometry
 
 __all__ = ["Mechanism", "mechanism_from_dict", "register_mechanism", "Geometry",
-           "PAPER_GEOMETRY"]
+           "PAPER_GEOMETRY", "FiveBar", "DEFAULT_FIVE_BAR"]

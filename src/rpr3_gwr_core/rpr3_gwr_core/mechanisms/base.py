@@ -96,10 +96,6 @@ class Mechanism(abc.ABC):
         """Characteristic length [length unit]."""
 
     @abc.abstractmethod
-    def inverse(self, poses):
-        """Joints of poses: ``(..., pose_size)`` to ``(..., n_joints)``."""
-
-    @abc.abstractmethod
     def solve(self, joints):
         """All real direct-kinematic solutions of many joint vectors.
 
@@ -115,9 +111,14 @@ class Mechanism(abc.ABC):
         """
 
     @abc.abstractmethod
-    def margin(self, poses):
+    def margin(self, poses, joints):
         """Signed, normalised distance from a parallel singularity, shape (...):
-        0 on one, in [-1, 1], its sign the aspect."""
+        0 on one, in [-1, 1], its sign the aspect.
+
+        ``joints`` (shape (..., n_joints), broadcast against ``poses``) are
+        those the poses solve: a mechanism whose pose alone does not fix its
+        passive joints (a five-bar's elbows) needs them.
+        """
 
     @abc.abstractmethod
     def predict(self, poses, joints_from, joints_to):
@@ -191,9 +192,10 @@ class Mechanism(abc.ABC):
         if not np.all(np.isfinite(joints)):
             raise InvalidInputError(f"joints must be finite, got {np.asarray(joints).tolist()}")
 
-    def aspect(self, poses):
-        """``sign(margin)``: +1 or -1, 0 exactly on a singularity, int8, shape (...)."""
-        return np.sign(self.margin(poses)).astype(np.int8)
+    def aspect(self, poses, joints=None):
+        """``sign(margin)``: +1 or -1, 0 exactly on a singularity, int8, shape
+        (...); ``joints`` as :meth:`margin`'s, which says when they are needed."""
+        return np.sign(self.margin(poses, joints)).astype(np.int8)
 
     def pose_difference(self, a, b):
         """``a - b`` with angles wrapped and measured as arc length at ``scale``."""

@@ -86,7 +86,7 @@ def follow_path(mechanism, path, pose, min_margin, max_step, poses=None):
     """
     if poses is None:
         poses = np.empty((path.shape[0], pose.size))
-    margin = float(mechanism.margin(pose))
+    margin = float(mechanism.margin(pose, path[0]))
     kernel, parameters = mechanism.step_kernel or (None, None)
     follow = _follow
     if kernel is None:

@@ -211,7 +211,9 @@ class Geometry(Mechanism):
     def solve(self, joints):
         return direct_kinematics_batch(joints, self)
 
-    def margin(self, poses):
+    def margin(self, poses, joints=None):
+        """:meth:`Mechanism.margin`; the 3-RPR's pose fixes its legs, so
+        ``joints`` may be left out."""
         poses = np.asarray(poses, dtype=float)
         if poses.shape == (3,):  # one pose, as the validator asks: no array overhead
             return np.float64(_pose_margin(self.parameters, self.scale, *poses.tolist()))

@@ -128,7 +128,7 @@ def locate(roadmap, configuration, mode_tol=DEFAULT_MODE_TOL, min_margin=DEFAULT
         raise AssemblyModeError(_no_mode_message(mechanism, poses, wanted, mode_tol,
                                                  values[:-1]))
     pose = poses[best]
-    margin = float(mechanism.margin(pose))
+    margin = float(mechanism.margin(pose, joints))
     if abs(margin) < min_margin:
         raise SingularityError(f"configuration is singular: margin {abs(margin):.2e} "
                                f"< {min_margin:g}")

@@ -118,7 +118,7 @@ def validate_path(mechanism, path, start_pose, goal_pose=None,
     if residual > 1e-6 * mechanism.scale**2:
         return result(False, f"start pose does not fit the first waypoint (residual "
                       f"{residual:.2e})", 0.0, 0)
-    margin = float(mechanism.margin(pose))
+    margin = float(mechanism.margin(pose, path[0]))
     sign = 1 if margin > 0 else -1
     if abs(margin) < min_margin:
         return result(False, f"start is singular (margin {abs(margin):.2e})", abs(margin), sign)

@@ -82,7 +82,7 @@ def _continue_into(field, joints, src, dst):
         # aspect: a step that jumped across a fold lands on the other sign.
         target_sign = np.sign(field.margin[dst[rows], best])
         same_aspect = ((np.sign(field.margin[src[rows], slots]) == target_sign)
-                       & (np.sign(mechanism.margin(pose)) == target_sign))
+                       & (np.sign(mechanism.margin(pose, joints[dst[rows]])) == target_sign))
         ok = landed & same_aspect
         target[rows[ok], slots[ok]] = best[ok]
         rows, slots = rows[~ok], slots[~ok]

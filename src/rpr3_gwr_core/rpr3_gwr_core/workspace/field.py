@@ -116,7 +116,9 @@ def compute_field(mechanism, grid):
         part = slice(start, start + _CHUNK)
         count[part], poses[part] = mechanism.solve(joints[part])
         valid = np.arange(n) < count[part, None]
-        margin[part][valid] = mechanism.margin(poses[part][valid])
+        margin[part][valid] = mechanism.margin(
+            poses[part][valid], np.broadcast_to(joints[part, None, :], valid.shape + (
+                mechanism.n_joints,))[valid])
 
     with ThreadPoolExecutor(max_workers=_WORKERS) as pool:
         list(pool.map(solve, range(0, grid.size, _CHUNK)))
