@@ -17,8 +17,7 @@ from rclpy.action import ActionClient
 from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rpr3_gwr_core.mechanisms.rpr3 import Geometry
-from rpr3_gwr_core.mechanisms.rpr3 import inverse_kinematics
+from rpr3_gwr_core.mechanisms.rpr3 import ThreeRPR
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import Configuration, PlatformPose
 from rpr3_gwr_msgs.srv import ResetDriver
@@ -284,9 +283,9 @@ def test_the_mechanism_markers_have_the_legs_of_the_joint_states(rig):
 
 
 def test_the_driver_takes_the_builders_geometry_parameters(ros_context):
-    geometry = Geometry(d1=16.0)
+    geometry = ThreeRPR(d1=16.0)
     pose = (5.0, 16.0, 2.0)
-    start = [*inverse_kinematics(pose, geometry), pose[2]]
+    start = [*geometry.inverse(pose), pose[2]]
     driver = Rpr3Driver(context=ros_context, parameter_overrides=[
         Parameter("d1", value=16.0), Parameter("initial_configuration", value=start)])
     builder = RoadmapBuilder(context=ros_context)

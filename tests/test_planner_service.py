@@ -16,7 +16,6 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rpr3_gwr_core.mechanisms.rpr3 import direct_kinematics
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID
 from rpr3_gwr_core.planning import Planner
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
@@ -273,7 +272,7 @@ def configurations(draw):
     kind = draw(st.sampled_from(["valid", "valid", "valid", "rho1_17", "anything"]))
     if kind == "valid":
         rho = (17.0, draw(st.floats(0.0, 50.0)), draw(st.floats(0.0, 50.0)))
-        alphas = direct_kinematics(rho)[:, 2]
+        alphas = PAPER_GEOMETRY.direct_kinematics(rho)[:, 2]
         if alphas.size == 0:
             return draw(st.sampled_from(PAPER_ENDS))
         return (*rho, float(draw(st.sampled_from(alphas.tolist()))))

@@ -12,7 +12,7 @@ from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from rosbags.rosbag2 import Reader
-from rpr3_gwr_core.mechanisms.rpr3 import inverse_kinematics, singularity_margin
+from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY
 from scipy.optimize import brentq
 from rosbags.typesys import Stores, get_typestore
 from rpr3_gwr_msgs.action import ExecuteTrajectory
@@ -39,8 +39,8 @@ def _singular_configuration(alpha=0.5):
     def pose(t):
         return [17.0 * math.cos(t), 17.0 * math.sin(t), alpha]
 
-    theta = brentq(lambda t: singularity_margin(pose(t)), math.pi / 3, math.pi / 2)
-    return (*inverse_kinematics(pose(theta)), alpha)
+    theta = brentq(lambda t: PAPER_GEOMETRY.margin(pose(t)), math.pi / 3, math.pi / 2)
+    return (*PAPER_GEOMETRY.inverse(pose(theta)), alpha)
 
 
 def _configuration(values):

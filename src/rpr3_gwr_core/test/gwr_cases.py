@@ -6,13 +6,13 @@ import math
 import numpy as np
 
 from rpr3_gwr_core.paper import rho1_slice
-from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY, Geometry
+from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY, ThreeRPR
 
 # The paper's four example configurations at rho1 = 17: (rho2, rho3, alpha [deg]).
 PAPER_EXAMPLES = [(12.0, 18.0, 122.82), (10.0, 25.0, -24.24),
                   (20.0, 25.0, 29.47), (20.0, 25.0, 96.13)]
 
-OTHER_GEOMETRY = Geometry(a2=(12.0, 0.0), a3=(2.0, 9.0), d1=10.0, d3=12.0, beta=0.9)
+OTHER_GEOMETRY = ThreeRPR(a2=(12.0, 0.0), a3=(2.0, 9.0), d1=10.0, d3=12.0, beta=0.9)
 
 # Coarse cases: name -> (geometry, grid).  The other geometry also has tests
 # of its own at rho1 = 7.7 and 10 in test_segmentation.py.

@@ -9,8 +9,6 @@ import pytest
 
 from rpr3_gwr_core import PAPER_GEOMETRY, InvalidInputError, build_roadmap
 from rpr3_gwr_core.io.cli import main
-from rpr3_gwr_core.mechanisms.rpr3 import (degenerate_orientations, inverse_kinematics,
-                                           singularity_margin)
 from rpr3_gwr_core.workspace import Grid
 from rpr3_gwr_core.workspace.cusps import find_cusps
 
@@ -31,12 +29,12 @@ def test_the_six_cusps_at_rho1_17(cusps):
 
 def test_cusps_are_singular_poses_with_their_legs(cusps):
     for cusp in cusps:
-        np.testing.assert_allclose(inverse_kinematics(cusp.pose), cusp.joints, atol=1e-9)
-        assert abs(singularity_margin(cusp.pose)) < 1e-6
+        np.testing.assert_allclose(PAPER_GEOMETRY.inverse(cusp.pose), cusp.joints, atol=1e-9)
+        assert abs(PAPER_GEOMETRY.margin(cusp.pose)) < 1e-6
 
 
 def test_the_first_cusp_lies_by_a_degenerate_orientation(cusps):
-    gap = np.min(np.abs(degenerate_orientations() - cusps[0].pose[2]))
+    gap = np.min(np.abs(PAPER_GEOMETRY.degenerate_orientations() - cusps[0].pose[2]))
     assert gap < 0.005
 
 
@@ -66,7 +64,7 @@ def test_cusp_curves_run_through_the_cusps_of_every_slice(capsys):
         assert np.all(np.linalg.norm(np.diff(legs, axis=0), axis=1) < 2.0)
         for c in curve:
             pose = np.array([c["x"], c["y"], c["alpha"]])
-            assert abs(singularity_margin(pose)) < 1e-6
+            assert abs(PAPER_GEOMETRY.margin(pose)) < 1e-6
 
 
 def test_cusp_curves_need_slices_along_one_joint():

@@ -8,9 +8,7 @@ import pytest
 from rpr3_gwr_core.exceptions import GWRError, InvalidInputError, OutOfGridError
 from rpr3_gwr_core.paper import rho1_slice
 from rpr3_gwr_core.workspace import compute_field
-from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY, Geometry, beta_from_sides
-from rpr3_gwr_core.mechanisms.rpr3 import (direct_kinematics, direct_kinematics_batch,
-                                           inverse_kinematics)
+from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY, ThreeRPR, beta_from_sides
 from rpr3_gwr_core.workspace.rotary_disk import rotary_order
 from rpr3_gwr_core.workspace.segmentation import segment
 
@@ -25,22 +23,23 @@ def test_invalid_input_error_is_a_gwr_error_and_a_value_error():
 
 @pytest.mark.parametrize("pose", [[NAN, 1.0, 0.0], [1.0, INF, 0.0], [1.0, 2.0, -INF],
                                   [1.0, 2.0], [1.0, 2.0, 3.0, 4.0], [[1.0, 2.0], [3.0, 4.0]]])
-def test_inverse_kinematics_rejects_bad_poses(pose):
+@pytest.mark.parametrize("method", ["inverse", "passive_angles", "parallel_jacobian"])
+def test_pose_methods_reject_bad_poses(pose, method):
     with pytest.raises(InvalidInputError):
-        inverse_kinematics(np.array(pose))
+        getattr(PAPER_GEOMETRY, method)(np.array(pose))
 
 
 @pytest.mark.parametrize("rho", [[NAN, 12.0, 18.0], [17.0, INF, 18.0], [17.0, 12.0, -18.0],
                                  [17.0, 12.0], [17.0, 12.0, 18.0, 1.0], [[17.0, 12.0, 18.0]]])
 def test_direct_kinematics_rejects_bad_legs(rho):
     with pytest.raises(InvalidInputError):
-        direct_kinematics(np.array(rho))
+        PAPER_GEOMETRY.direct_kinematics(np.array(rho))
 
 
 @pytest.mark.parametrize("rho", [[17.0, 12.0, 18.0], [[[17.0, 12.0, 18.0]]], [[-1.0, 2.0, 3.0]]])
-def test_direct_kinematics_batch_rejects_bad_shapes_and_values(rho):
+def test_solve_rejects_bad_shapes_and_values(rho):
     with pytest.raises(InvalidInputError):
-        direct_kinematics_batch(np.array(rho))
+        PAPER_GEOMETRY.solve(np.array(rho))
 
 
 @pytest.mark.parametrize("kwargs", [
@@ -60,17 +59,17 @@ def test_grid_rejects_bad_values(kwargs):
 ])
 def test_geometry_rejects_bad_values(kwargs):
     with pytest.raises(InvalidInputError):
-        Geometry(**kwargs)
+        ThreeRPR(**kwargs)
 
 
 def test_geometry_rejects_a_flat_platform_at_pi():
     with pytest.raises(InvalidInputError):
-        Geometry(beta=math.pi)
+        ThreeRPR(beta=math.pi)
 
 
 def test_geometry_rejects_a_scalar_base_point():
     with pytest.raises(InvalidInputError):
-        Geometry(a2=5.0)
+        ThreeRPR(a2=5.0)
 
 
 @pytest.mark.parametrize("sides", [(1.0, 5.0, 1.0), (0.0, 1.0, 1.0), (NAN, 1.0, 1.0),

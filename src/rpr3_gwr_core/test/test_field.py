@@ -7,7 +7,7 @@ from hypothesis import given, settings, strategies as st
 from rpr3_gwr_core.paper import PAPER_GRID, rho1_slice
 from rpr3_gwr_core.workspace import Grid, compute_field
 from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY
-from rpr3_gwr_core.mechanisms.rpr3 import MAX_SOLUTIONS, direct_kinematics, singularity_margin
+from rpr3_gwr_core.mechanisms.rpr3 import MAX_SOLUTIONS
 from rpr3_gwr_core.mechanisms import rpr3
 from rpr3_gwr_core.mechanisms.trig_roots import sampled_roots
 
@@ -61,7 +61,7 @@ def test_grid_dict_round_trip():
 def test_field_counts_match_direct_kinematics(small_field):
     rho = small_field.grid.joints()
     for cell in range(small_field.grid.size):
-        poses = direct_kinematics(rho[cell])
+        poses = PAPER_GEOMETRY.direct_kinematics(rho[cell])
         assert small_field.count[cell] == len(poses)
         np.testing.assert_allclose(small_field.poses[cell, :len(poses)], poses)
 
@@ -82,7 +82,7 @@ def test_field_valid_mask_follows_count(small_field):
 def test_field_margin_is_the_singularity_margin(small_field):
     valid = small_field.valid
     np.testing.assert_allclose(small_field.margin[valid],
-                               singularity_margin(small_field.poses[valid]))
+                               PAPER_GEOMETRY.margin(small_field.poses[valid]))
 
 
 def test_field_separation_is_the_distance_to_the_nearest_other_solution(small_field):

@@ -16,10 +16,9 @@ from scipy.sparse.csgraph import dijkstra
 from rpr3_gwr_core.exceptions import (AssemblyModeError, InfeasiblePathError, InvalidInputError,
                                       NoSolutionError, OutOfGridError, FixedJointMismatchError,
                                       SingularityError)
-from rpr3_gwr_core.mechanisms.rpr3 import Geometry
+from rpr3_gwr_core.mechanisms.rpr3 import ThreeRPR
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, rho1_slice
 from rpr3_gwr_core.planning.global_planning import feasibility, global_paths
-from rpr3_gwr_core.mechanisms.rpr3 import inverse_kinematics, singularity_margin
 from rpr3_gwr_core.planning.planner import DEFAULT_CLEARANCE, PlanOptions, Planner
 from rpr3_gwr_core.workspace.grid import Axis, Grid
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
@@ -78,7 +77,7 @@ def test_returned_trajectory_passes_an_independent_validation(planner, paper_roa
                               plan.goal.pose,
                               max_step=0.01)
         assert again.ok, again.reason
-        np.testing.assert_allclose(inverse_kinematics(plan.poses), plan.joints, atol=1e-7)
+        np.testing.assert_allclose(PAPER_GEOMETRY.inverse(plan.poses), plan.joints, atol=1e-7)
 
 
 def _layered_reference_cost(roadmap, patches, start_cell, goal_cell, clearance):
@@ -135,16 +134,16 @@ def test_local_paths_cost_what_dijkstra_finds(planner, paper_roadmap, clearance)
     assert checked >= 4
 
 
-class _InterpretedGeometry(Geometry):
+class _InterpretedThreeRPR(ThreeRPR):
     """The paper's geometry without its compiled step: the validator then
-    runs its loop in the interpreter, on :meth:`Geometry.step`."""
+    runs its loop in the interpreter, on :meth:`ThreeRPR.step`."""
 
     step_kernel = None
 
 
 @pytest.mark.parametrize("min_margin", [1e-3, 0.02, 0.2])
 def test_the_compiled_validator_agrees_with_the_interpreted_one(planner, min_margin):
-    interpreted = _InterpretedGeometry()
+    interpreted = _InterpretedThreeRPR()
     plans = [planner.plan(start, goal) for start, goal in ((Q1, Q2), (MODE_A, MODE_B))]
     paths = [(p.joints, p.start.pose, p.goal.pose) for p in plans]
     # Straight across, the first example crosses the singular locus, and the
@@ -234,8 +233,8 @@ def test_a_configuration_on_the_singular_locus_is_refused(planner):
     def on_circle(t):
         return [17 * math.cos(t), 17 * math.sin(t), alpha]
 
-    theta = brentq(lambda t: singularity_margin(on_circle(t)), math.pi / 3, math.pi / 2)
-    rho = inverse_kinematics(on_circle(theta))
+    theta = brentq(lambda t: PAPER_GEOMETRY.margin(on_circle(t)), math.pi / 3, math.pi / 2)
+    rho = PAPER_GEOMETRY.inverse(on_circle(theta))
     assert rho[0] == pytest.approx(17)
     with pytest.raises(SingularityError):
         planner.locate((*rho, alpha))
@@ -273,7 +272,7 @@ def test_every_plan_validates_and_infeasible_only_without_roadmap_path(planner, 
     assert connected
     check = validate_path(paper_roadmap.mechanism, plan.joints, plan.start.pose, plan.goal.pose)
     assert check.ok, check.reason
-    assert np.all(np.sign(singularity_margin(plan.poses)) == check.aspect)
+    assert np.all(np.sign(PAPER_GEOMETRY.margin(plan.poses)) == check.aspect)
 
 
 def _shortcut_on_square(points, patches, margins, clearance=0.1, split=False,

@@ -16,7 +16,6 @@ from hypothesis import HealthCheck, assume, given, settings, strategies as st
 from rpr3_gwr_core.exceptions import (AssemblyModeError, InfeasiblePathError, InvalidInputError,
                                       OutOfGridError)
 from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY
-from rpr3_gwr_core.mechanisms.rpr3 import singularity_margin
 from rpr3_gwr_core.planning.planner import DEFAULT_CLEARANCE, PlanOptions, Planner
 from rpr3_gwr_core.planning.trajectory import time_parameterize
 from rpr3_gwr_core.planning.validation import DEFAULT_MIN_MARGIN, validate_path
@@ -69,7 +68,7 @@ def test_reported_valid_configurations_plan(planner, paper_roadmap, start, goal)
 
 def _valid_torus_configuration(theta1, alpha):
     configuration, pose = torus_configuration(theta1, alpha)
-    margin = float(singularity_margin(pose))
+    margin = float(PAPER_GEOMETRY.margin(pose))
     assume(max(configuration[1:3]) <= 50.0 and abs(margin) >= PROPERTY_MARGIN)
     return configuration, np.sign(margin)
 

@@ -15,7 +15,7 @@ import array
 import numpy as np
 from builtin_interfaces.msg import Duration
 from rpr3_gwr_core.exceptions import InvalidInputError
-from rpr3_gwr_core.mechanisms import Geometry
+from rpr3_gwr_core.mechanisms import ThreeRPR
 from rpr3_gwr_core.workspace import (AdaptiveGrid, Axis, Grid, NSolutionField, Roadmap,
                                      Segmentation, roadmap_graph)
 from rpr3_gwr_core.workspace.cusps import known_cusps
@@ -69,7 +69,7 @@ def geometry_to_msg(geometry):
 
 
 def geometry_from_msg(msg):
-    return Geometry(a1=tuple(msg.a1), a2=tuple(msg.a2), a3=tuple(msg.a3), d1=msg.d1, d3=msg.d3,
+    return ThreeRPR(a1=tuple(msg.a1), a2=tuple(msg.a2), a3=tuple(msg.a3), d1=msg.d1, d3=msg.d3,
                     beta=msg.beta)
 
 

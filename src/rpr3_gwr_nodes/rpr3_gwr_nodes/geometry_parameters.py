@@ -3,14 +3,14 @@ by every node that needs it (the builder and the driver), so one launch
 configuration describes one mechanism."""
 
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
-from rpr3_gwr_core.mechanisms import PAPER_GEOMETRY, Geometry
+from rpr3_gwr_core.mechanisms import PAPER_GEOMETRY, ThreeRPR
 
 __all__ = ["declare_geometry"]
 
 
 def declare_geometry(node):
     """Declare ``a1``, ``a2``, ``a3``, ``d1``, ``d3`` and ``beta`` on ``node``
-    (read-only, the paper's geometry by default) and return their Geometry.
+    (read-only, the paper's geometry by default) and return their ThreeRPR.
 
     Raises
     ------
@@ -30,5 +30,5 @@ def declare_geometry(node):
         floating_point_range=[FloatingPointRange(from_value=-3.1416, to_value=3.1416)]))
     value = {name: node.get_parameter(name).value
              for name in ("a1", "a2", "a3", "d1", "d3", "beta")}
-    return Geometry(a1=tuple(value["a1"]), a2=tuple(value["a2"]), a3=tuple(value["a3"]),
+    return ThreeRPR(a1=tuple(value["a1"]), a2=tuple(value["a2"]), a3=tuple(value["a3"]),
                     d1=value["d1"], d3=value["d3"], beta=value["beta"])

@@ -50,7 +50,6 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallb
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rpr3_gwr_core.mechanisms.continuation import CANNOT_FOLLOW, CROSSED, follow_path
-from rpr3_gwr_core.mechanisms.rpr3 import direct_kinematics, passive_angles, singularity_margin
 from rpr3_gwr_core.planning import DEFAULT_MAX_STEP
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import PlatformPose
@@ -165,7 +164,7 @@ class Rpr3Driver(Node):
             raise _Refused(_Reset.ERROR_OUT_OF_RANGE,
                            f"legs {values[:3]} outside the leg limits [{low:g}, {high:g}]")
         rho, alpha = np.array(values[:3]), values[3]
-        poses = direct_kinematics(rho, self.geometry)
+        poses = self.geometry.direct_kinematics(rho)
         if len(poses) == 0:
             raise _Refused(_Reset.ERROR_NO_SOLUTION, f"no real solution at rho = {values[:3]}")
         off = np.abs(np.remainder(poses[:, 2] - alpha + np.pi, 2 * np.pi) - np.pi)
@@ -174,7 +173,7 @@ class Rpr3Driver(Node):
             raise _Refused(_Reset.ERROR_NO_ASSEMBLY_MODE,
                            f"no assembly mode within 1 deg of alpha = "
                            f"{math.degrees(math.remainder(alpha, 2 * math.pi)):.2f} deg")
-        margin = float(singularity_margin(poses[k], self.geometry))
+        margin = float(self.geometry.margin(poses[k]))
         if abs(margin) < self.get_parameter("abort_margin").value:
             raise _Refused(_Reset.ERROR_SINGULAR, f"configuration is singular (margin "
                            f"{abs(margin):.2e})")
@@ -193,7 +192,7 @@ class Rpr3Driver(Node):
         msg.header.stamp = self.get_clock().now().to_msg()
         msg.name = JOINT_NAMES + PASSIVE_JOINT_NAMES
         msg.position = [float(v) for v in rho] + [
-            float(v) for v in passive_angles(pose, self.geometry)]
+            float(v) for v in self.geometry.passive_angles(pose)]
         msg.velocity = [float(v) for v in velocity] + [math.nan] * 3
         self.joint_pub.publish(msg)
         self.pose_pub.publish(_pose_msg(pose))

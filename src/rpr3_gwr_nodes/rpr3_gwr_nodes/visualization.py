@@ -11,7 +11,6 @@ roadmap and the joint path are drawn over one another.
 import numpy as np
 from geometry_msgs.msg import Point, Pose
 from nav_msgs.msg import MapMetaData, OccupancyGrid
-from rpr3_gwr_core.mechanisms.rpr3 import inverse_kinematics, passive_angles
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -50,7 +49,7 @@ def mechanism_markers(geometry, pose, margin, warn, abort, stamp):
 
     Parameters
     ----------
-    geometry : rpr3_gwr_core.mechanisms.Geometry
+    geometry : rpr3_gwr_core.mechanisms.ThreeRPR
     pose : array_like, shape (3,)
         ``(x, y, alpha)`` [length unit, length unit, rad].
     margin : float
@@ -67,8 +66,8 @@ def mechanism_markers(geometry, pose, margin, warn, abort, stamp):
     """
     # B_i from the legs' lengths and directions, the joints the driver reports.
     base = geometry.base
-    theta = passive_angles(pose, geometry)
-    joints = base + inverse_kinematics(pose, geometry)[:, None] * np.stack(
+    theta = geometry.passive_angles(pose)
+    joints = base + geometry.inverse(pose)[:, None] * np.stack(
         [np.cos(theta), np.sin(theta)], axis=-1)
     color = margin_color(margin, warn, abort)
     bases = _marker(stamp, BASE_FRAME, "base", Marker.SPHERE_LIST, 0.8, _GREY)

@@ -10,7 +10,6 @@ import numpy as np
 
 from ..exceptions import GWRError, InvalidInputError
 from ..mechanisms import mechanism_from_dict
-from ..mechanisms.rpr3 import aspect, direct_kinematics
 from ..paper import FULL_BASE_GRID, FULL_REFINEMENT, PAPER_GEOMETRY, rho1_slice
 from ..planning import NEVER, PlanOptions, Planner, Termination
 from ..workspace import Grid, build_roadmap
@@ -62,8 +61,8 @@ def _cusps(args):
 
 
 def _dk(args):
-    poses = direct_kinematics(np.array([args.rho1, args.rho2, args.rho3]), PAPER_GEOMETRY)
-    signs = aspect(poses, PAPER_GEOMETRY) if len(poses) else []
+    poses = PAPER_GEOMETRY.direct_kinematics(np.array([args.rho1, args.rho2, args.rho3]))
+    signs = PAPER_GEOMETRY.aspect(poses) if len(poses) else []
     return [{"x": float(p[0]), "y": float(p[1]), "alpha": float(p[2]), "aspect": int(s)}
             for p, s in zip(poses, signs)]
 

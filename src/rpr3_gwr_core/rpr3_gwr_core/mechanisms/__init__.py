@@ -3,7 +3,7 @@ the five-bar."""
 
 from .base import Mechanism, mechanism_from_dict, register_mechanism
 from .five_bar import DEFAULT_FIVE_BAR, FiveBar
-from .rpr3 import PAPER_GEOMETRY, Geometry
+from .rpr3 import PAPER_GEOMETRY, ThreeRPR
 
-__all__ = ["Mechanism", "mechanism_from_dict", "register_mechanism", "Geometry",
+__all__ = ["Mechanism", "mechanism_from_dict", "register_mechanism", "ThreeRPR",
            "PAPER_GEOMETRY", "FiveBar", "DEFAULT_FIVE_BAR"]

@@ -53,22 +53,12 @@ from .base import STEP_KERNEL_SIGNATURE, Mechanism, register_mechanism
 from .trig_roots import sampled_roots
 
 __all__ = [
-    "Geometry",
+    "ThreeRPR",
     "PAPER_GEOMETRY",
     "beta_from_sides",
     "MAX_SOLUTIONS",
     "wrap_angle",
-    "inverse_kinematics",
-    "direct_kinematics",
-    "direct_kinematics_batch",
-    "passive_angles",
-    "parallel_jacobian",
     "serial_jacobian",
-    "singularity_margin",
-    "aspect",
-    "degenerate_orientations",
-    "constraint_residual",
-    "newton_correct",
 ]
 
 MAX_SOLUTIONS = 6
@@ -106,7 +96,7 @@ def beta_from_sides(d1, d2, d3):
 
 @register_mechanism("3-RPR")
 @dataclass(frozen=True)
-class Geometry(Mechanism):
+class ThreeRPR(Mechanism):
     """Base points and platform of a 3-RPR manipulator: the 3-RPR mechanism.
 
     Joints are the leg lengths ``(rho1, rho2, rho3)`` [length unit], poses
@@ -200,20 +190,137 @@ class Geometry(Mechanism):
         except (KeyError, TypeError) as exc:
             raise InvalidInputError(f"malformed geometry: {exc}") from exc
 
-    # The Mechanism interface, served by the functions below.
+    # The Mechanism interface and the 3-RPR's own kinematics, served by the
+    # functions below.
 
     def check_joints(self, joints):
         _as_rho(joints)
 
     def inverse(self, poses):
-        return inverse_kinematics(poses, self)
+        """Leg lengths of platform poses (the inverse kinematics).
+
+        Parameters
+        ----------
+        poses : array_like, shape (..., 3)
+            ``(x, y, alpha)`` [length unit, length unit, rad], finite.
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            ``(rho1, rho2, rho3)`` [length unit].
+        """
+        return _inverse_kinematics(_as_pose(poses), self)
 
     def solve(self, joints):
-        return direct_kinematics_batch(joints, self)
+        """All real direct-kinematic solutions of many leg configurations.
+
+        Parameters
+        ----------
+        joints : array_like, shape (n, 3)
+            Leg lengths ``(rho1, rho2, rho3)`` [length unit], finite and
+            non-negative.
+
+        Returns
+        -------
+        count : ndarray of uint8, shape (n,)
+            Number of real solutions.
+        poses : ndarray, shape (n, 6, 3)
+            ``(x, y, alpha)`` [length unit, length unit, rad] of each solution
+            sorted by alpha in (-pi, pi]; NaN beyond ``count``.  Near a
+            degenerate orientation, where two assembly modes share alpha, the
+            two differ in (x, y).
+        """
+        rho = _as_rho(joints)
+        if rho.ndim != 2:
+            raise InvalidInputError(f"rho must have shape (n, 3), got {rho.shape}")
+        return _solve(rho, self)
+
+    def direct_kinematics(self, joints):
+        """All real direct-kinematic solutions of one leg configuration.
+
+        Parameters
+        ----------
+        joints : array_like, shape (3,)
+            ``(rho1, rho2, rho3)`` [length unit], finite and non-negative.
+
+        Returns
+        -------
+        ndarray, shape (k, 3)
+            ``(x, y, alpha)`` [length unit, length unit, rad] of each of the
+            ``k <= 6`` solutions, sorted by alpha in (-pi, pi].
+        """
+        rho = _as_rho(joints)
+        if rho.shape != (3,):
+            raise InvalidInputError(f"rho must have shape (3,), got {rho.shape}")
+        return _direct_kinematics(rho, self)
+
+    def passive_angles(self, poses):
+        """Directions of the legs, the passive joint angles theta1..theta3.
+
+        Parameters
+        ----------
+        poses : array_like, shape (..., 3)
+            ``(x, y, alpha)`` [length unit, length unit, rad], finite.
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            ``theta_i = atan2(B_i - A_i)`` [rad] in (-pi, pi].
+        """
+        return _passive_angles(_as_pose(poses), self)
+
+    def parallel_jacobian(self, poses):
+        """The parallel Jacobian ``Jx = dF/d(x, y, alpha)``.
+
+        Parameters
+        ----------
+        poses : array_like, shape (..., 3)
+            ``(x, y, alpha)`` [length unit, length unit, rad], finite.
+
+        Returns
+        -------
+        ndarray, shape (..., 3, 3)
+            Row i is ``2 (u_x, u_y, u . dB_i/dalpha)`` with ``u = B_i - A_i``
+            [length unit in the first two columns, length unit**2 in the third].
+        """
+        return _parallel_jacobian(_as_pose(poses), self)
+
+    def degenerate_orientations(self):
+        """Orientations where the direct kinematics degenerates.
+
+        At these alpha the lines for B1 given by legs 2 and 3 are parallel
+        (``AE - BD = 0``), so two assembly modes can share alpha with different
+        positions (paper section 4.2.3).
+
+        Returns
+        -------
+        ndarray, shape (k,)
+            Sorted orientations [rad] in (-pi, pi], ``k`` 0 or 2.
+        """
+        return _degenerate_orientations(self)
 
     def margin(self, poses, joints=None):
-        """:meth:`Mechanism.margin`; the 3-RPR's pose fixes its legs, so
-        ``joints`` may be left out."""
+        """Signed, normalised distance from a parallel singularity
+        (:meth:`Mechanism.margin`).
+
+        The orientation column of ``Jx`` is divided by :attr:`scale` so that
+        all columns are lengths, then ``det(Jx)`` is divided by the product of
+        the row norms (Hadamard's bound).  The result lies in [-1, 1], is 0
+        exactly on a parallel singularity (and where a leg has zero length)
+        and its sign is the aspect.
+
+        Parameters
+        ----------
+        poses : array_like, shape (..., 3)
+            ``(x, y, alpha)`` [length unit, length unit, rad].
+        joints : array_like, optional
+            Ignored: the 3-RPR's pose fixes its legs.
+
+        Returns
+        -------
+        ndarray, shape (...)
+            Dimensionless; a NumPy scalar for one pose.
+        """
         poses = np.asarray(poses, dtype=float)
         if poses.shape == (3,):  # one pose, as the validator asks: no array overhead
             return np.float64(_pose_margin(self.parameters, self.scale, *poses.tolist()))
@@ -223,9 +330,39 @@ class Geometry(Mechanism):
         return _predict(poses, joints_from, joints_to, self)
 
     def correct(self, poses, joints, iterations):
+        """Newton steps on the constraint equations at fixed legs.
+
+        Parameters
+        ----------
+        poses : ndarray, shape (..., 3)
+            Initial guesses ``(x, y, alpha)`` [length unit, length unit, rad];
+            not modified.
+        joints : ndarray, shape (..., 3)
+            Leg lengths to satisfy [length unit].
+        iterations : int
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            Corrected poses (alpha is not wrapped).
+        """
         return _newton(poses, joints, self, iterations)
 
     def residual(self, poses, joints):
+        """Constraint residuals ``F(q, x) = |B_i - A_i|**2 - rho_i**2``.
+
+        Parameters
+        ----------
+        poses : array_like, shape (..., 3)
+            ``(x, y, alpha)`` [length unit, length unit, rad].
+        joints : array_like, shape (..., 3)
+            ``(rho1, rho2, rho3)`` [length unit].
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            One per leg [length unit**2].
+        """
         poses, joints = np.asarray(poses, dtype=float), np.asarray(joints, dtype=float)
         if poses.shape == joints.shape == (3,):
             return np.array(_leg_residuals(_pose_rows(self.parameters, *poses.tolist()),
@@ -250,7 +387,7 @@ class Geometry(Mechanism):
         return _refine_cusp(self, pose, float(fixed[0]))
 
 
-PAPER_GEOMETRY = Geometry()
+PAPER_GEOMETRY = ThreeRPR()
 
 # A root of the sextic is real when its orientation's imaginary part is below
 # this; a double root splits into a pair whose imaginary parts are of order
@@ -304,56 +441,20 @@ def _leg_vectors(pose, geometry):
     return legs, offsets
 
 
-def inverse_kinematics(pose, geometry=PAPER_GEOMETRY):
-    """Leg lengths of a platform pose.
-
-    Parameters
-    ----------
-    pose : array_like, shape (..., 3)
-        ``(x, y, alpha)`` [length unit, length unit, rad].
-    geometry : Geometry
-
-    Returns
-    -------
-    ndarray, shape (..., 3)
-        ``(rho1, rho2, rho3)`` [length unit].
-    """
-    legs, _ = _leg_vectors(_as_pose(pose), geometry)
+def _inverse_kinematics(pose, geometry):
+    """:meth:`ThreeRPR.inverse` of checked poses."""
+    legs, _ = _leg_vectors(pose, geometry)
     return np.linalg.norm(legs, axis=-1)
 
 
-def passive_angles(pose, geometry=PAPER_GEOMETRY):
-    """Directions of the legs, the passive joint angles theta1..theta3.
-
-    Parameters
-    ----------
-    pose : array_like, shape (..., 3)
-
-    Returns
-    -------
-    ndarray, shape (..., 3)
-        ``theta_i = atan2(B_i - A_i)`` [rad] in (-pi, pi].
-    """
-    legs, _ = _leg_vectors(_as_pose(pose), geometry)
+def _passive_angles(pose, geometry):
+    """:meth:`ThreeRPR.passive_angles` of checked poses."""
+    legs, _ = _leg_vectors(pose, geometry)
     return np.arctan2(legs[..., 1], legs[..., 0])
 
 
-def parallel_jacobian(pose, geometry=PAPER_GEOMETRY):
-    """The parallel Jacobian ``Jx = dF/d(x, y, alpha)``.
-
-    Parameters
-    ----------
-    pose : array_like, shape (..., 3)
-
-    Returns
-    -------
-    ndarray, shape (..., 3, 3)
-        Row i is ``2 (u_x, u_y, u . dB_i/dalpha)`` with ``u = B_i - A_i``.
-    """
-    return _parallel_jacobian(_as_pose(pose), geometry)
-
-
 def _parallel_jacobian(pose, geometry):
+    """:meth:`ThreeRPR.parallel_jacobian` of checked poses."""
     u1x, u1y, u2x, u2y, w2, u3x, u3y, w3 = _rows(pose, geometry)
     zero = np.zeros_like(u1x)
     return 2.0 * np.stack([np.stack([u1x, u1y, zero], -1), np.stack([u2x, u2y, w2], -1),
@@ -443,68 +544,13 @@ def serial_jacobian(rho):
     return 2.0 * rho[..., :, None] * np.eye(3)
 
 
-def singularity_margin(pose, geometry=PAPER_GEOMETRY):
-    """Signed, normalised distance from a parallel singularity.
-
-    The orientation column of ``Jx`` is divided by ``geometry.scale`` so that
-    all columns are lengths, then ``det(Jx)`` is divided by the product of the
-    row norms (Hadamard's bound).  The result lies in [-1, 1], is 0 exactly on
-    a parallel singularity and its sign is the aspect.
-
-    Parameters
-    ----------
-    pose : array_like, shape (..., 3)
-
-    Returns
-    -------
-    ndarray, shape (...)
-    """
-    return _singularity_margin(_as_pose(pose), geometry)
-
-
 def _singularity_margin(pose, geometry):
+    """:meth:`ThreeRPR.margin` of many poses."""
     rows = _rows(pose, geometry)
     norms = _row_norms(rows, geometry.scale)
     with np.errstate(invalid="ignore", divide="ignore"):
         margin = _normalised_det(rows, norms, geometry.scale)
     return np.where((norms[0] > 0) & (norms[1] > 0) & (norms[2] > 0), margin, 0.0)
-
-
-
-
-def aspect(pose, geometry=PAPER_GEOMETRY):
-    """``sign(det Jx)`` of a pose: +1 or -1 (0 exactly on a singularity).
-
-    Returns
-    -------
-    ndarray of int8, shape (...)
-    """
-    return np.sign(singularity_margin(pose, geometry)).astype(np.int8)
-
-
-def constraint_residual(pose, rho, geometry=PAPER_GEOMETRY):
-    """``F(q, x) = |B_i - A_i|**2 - rho_i**2``, shape (..., 3) [length unit**2]."""
-    legs, _ = _leg_vectors(_as_pose(pose), geometry)
-    return np.sum(legs * legs, axis=-1) - _as_rho(rho) ** 2
-
-
-def newton_correct(pose, rho, geometry=PAPER_GEOMETRY, iterations=3):
-    """Newton steps on the constraint equations at fixed legs.
-
-    Parameters
-    ----------
-    pose : array_like, shape (..., 3)
-        Initial guesses.
-    rho : array_like, shape (..., 3)
-        Leg lengths to satisfy.
-    iterations : int
-
-    Returns
-    -------
-    ndarray, shape (..., 3)
-        Corrected poses (alpha is not wrapped).
-    """
-    return _newton(_as_pose(pose).copy(), _as_rho(rho), geometry, iterations)
 
 
 def _newton(pose, rho, geometry, iterations):
@@ -532,7 +578,7 @@ _JUMP_FLOOR = 1e-7
 
 
 def _step(geometry, pose, rho_from, rho_to):
-    """One predictor-corrector step of one pose (:meth:`Geometry.step`)."""
+    """One predictor-corrector step of one pose (:meth:`ThreeRPR.step`)."""
     x, y, alpha = (float(v) for v in pose)
     ok, x, y, alpha, margin = _compiled_step(
         geometry.parameters, geometry.scale, x, y, alpha,
@@ -591,7 +637,7 @@ def _compiled_step(parameters, scale, x, y, alpha, r1, r2, r3, t1, t2, t3):
 @numba.njit(STEP_KERNEL_SIGNATURE, cache=True)
 def _step_kernel(parameters, pose, joints_from, joints_to):
     """:func:`_compiled_step` as :data:`~.base.STEP_KERNEL_SIGNATURE` takes
-    it; ``parameters`` are :attr:`Geometry.parameters`, then the scale."""
+    it; ``parameters`` are :attr:`ThreeRPR.parameters`, then the scale."""
     p = parameters
     ok, x, y, alpha, margin = _compiled_step(
         (p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8]), p[9], pose[0], pose[1], pose[2],
@@ -802,31 +848,8 @@ def _companion_roots(coeffs, phi, values):
     return np.where(real, wrap_angle(2 * np.arctan(t.real) + alpha0[:, None]), np.nan)
 
 
-def direct_kinematics_batch(rho, geometry=PAPER_GEOMETRY):
-    """All real direct-kinematic solutions of many leg configurations.
-
-    Parameters
-    ----------
-    rho : array_like, shape (n, 3)
-        Leg lengths [length unit], finite and non-negative.
-    geometry : Geometry
-
-    Returns
-    -------
-    count : ndarray of uint8, shape (n,)
-        Number of real solutions.
-    poses : ndarray, shape (n, 6, 3)
-        ``(x, y, alpha)`` of each solution sorted by alpha in (-pi, pi];
-        NaN beyond ``count``.  Near a degenerate orientation, where two
-        assembly modes share alpha, the two differ in (x, y).
-    """
-    rho = _as_rho(rho)
-    if rho.ndim != 2:
-        raise InvalidInputError(f"rho must have shape (n, 3), got {rho.shape}")
-    return _solve(rho, geometry)
-
-
 def _solve(rho, geometry):
+    """:meth:`ThreeRPR.solve` of checked legs, shape (n, 3)."""
     n = rho.shape[0]
     rho1, rho2, rho3 = rho[:, 0], rho[:, 1], rho[:, 2]
     alpha = _real_roots(_equation7_coefficients(rho1, rho2, rho3, geometry))
@@ -917,38 +940,15 @@ def _degenerate_poses(rho, alpha, row, big_a, big_b, big_d, big_e, g, h, geometr
     return np.stack([chosen[:, 0] + ax, chosen[:, 1] + ay, alpha], axis=-1)
 
 
-def direct_kinematics(rho, geometry=PAPER_GEOMETRY):
-    """All real direct-kinematic solutions of one leg configuration.
-
-    Parameters
-    ----------
-    rho : array_like, shape (3,)
-        ``(rho1, rho2, rho3)`` [length unit].
-
-    Returns
-    -------
-    ndarray, shape (k, 3)
-        ``(x, y, alpha)`` of each of the ``k <= 6`` solutions, sorted by alpha.
-    """
-    rho = _as_rho(rho)
-    if rho.shape != (3,):
-        raise InvalidInputError(f"rho must have shape (3,), got {rho.shape}")
+def _direct_kinematics(rho, geometry):
+    """:meth:`ThreeRPR.direct_kinematics` of checked legs, shape (3,)."""
     count, poses = _solve(rho[None, :], geometry)
     return poses[0, : count[0]]
 
 
-def degenerate_orientations(geometry=PAPER_GEOMETRY):
-    """Orientations where the direct kinematics degenerates.
-
-    At these alpha the lines for B1 given by legs 2 and 3 are parallel
-    (``AE - BD = 0``), so two assembly modes can share alpha with different
-    positions (paper section 4.2.3).
-
-    Returns
-    -------
-    ndarray, shape (k,)
-        Sorted orientations [rad] in (-pi, pi].
-    """
+def _degenerate_orientations(geometry):
+    """:meth:`ThreeRPR.degenerate_orientations`: the roots of ``AE - BD``,
+    a first-order trigonometric polynomial in alpha."""
     n = 16
     alpha = 2 * np.pi * np.arange(n) / n
     big_a, big_b, _, big_d, big_e, _ = _linear_terms(alpha, geometry)

@@ -25,7 +25,7 @@ from ..mechanisms.continuation import CANNOT_FOLLOW, CROSSED, TOO_CLOSE, follow_
 __all__ = ["Validation", "validate_path", "DEFAULT_MAX_STEP", "DEFAULT_MIN_MARGIN"]
 
 DEFAULT_MAX_STEP = 0.0625
-# Normalised |det Jx| (kinematics.singularity_margin) below which a
+# Normalised |det Jx| (Mechanism.margin) below which a
 # configuration counts as singular: the platform's orientation then moves
 # more than about a thousand times faster than at a well-conditioned pose.
 DEFAULT_MIN_MARGIN = 1e-3
