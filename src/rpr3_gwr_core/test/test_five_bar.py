@@ -298,3 +298,59 @@ def test_plan_inside_one_aspect_stays_on_its_branch(roadmap, ends, branch):
     same = (plus, minus)[branch - 1]
     margins = reference_margin(same, dense[:, 0], dense[:, 1])
     assert np.all(np.sign(margins) == sign) and np.min(np.abs(margins)) > 1e-3
+
+
+# --- on the torus: both joints periodic ---------------------------------------------
+
+@pytest.fixture(scope="module")
+def torus_roadmap():
+    """The roadmap over the joint torus, 120 x 120 cells, both axes periodic."""
+    step = 2 * math.pi / 120
+    grid = Grid(axes=(Axis(0, -math.pi, math.pi - step, step, periodic=True),
+                      Axis(1, -math.pi, math.pi - step, step, periodic=True)))
+    return build_roadmap(DEFAULT_FIVE_BAR, grid)
+
+
+def _assert_on_branch(joints, branch):
+    """Every joint vector of a polyline, densely sampled, has both solutions
+    and keeps the branch's sign, clear of the fold (closed form)."""
+    s = np.linspace(0.0, 1.0, 201)[:, None, None]
+    dense = (joints[:-1] + s * np.diff(joints, axis=0)).reshape(-1, 2)
+    exists, plus, minus = reference_solutions(dense[:, 0], dense[:, 1])
+    assert np.all(exists)
+    margins = reference_margin((plus, minus)[branch - 1], dense[:, 0], dense[:, 1])
+    assert np.all(np.sign(margins) == (1 if branch == 1 else -1))
+    assert np.min(np.abs(margins)) > 1e-3
+
+
+@pytest.mark.parametrize("branch", [1, 2])
+def test_a_plan_across_the_seam_goes_the_short_way(torus_roadmap, branch):
+    start_q, goal_q = (3.1, 2.5), (-3.1, 2.5)
+    start, goal = reference_solutions(*start_q)[branch], reference_solutions(*goal_q)[branch]
+    plan = Planner(torus_roadmap).plan((*start_q, start[1]), (*goal_q, goal[1]))
+    assert plan.validation.ok
+    # 2 pi - 6.2 = 0.083 rad across the seam, not 6.2 rad back round.
+    assert np.linalg.norm(np.diff(plan.joints, axis=0), axis=1).sum() < 0.1
+    assert np.allclose(plan.joints[0], start_q)
+    assert np.allclose(np.remainder(plan.joints[-1] - goal_q + math.pi, 2 * math.pi), math.pi)
+    _assert_on_branch(plan.joints, branch)
+
+
+def test_random_pairs_on_the_torus_stay_on_their_branch(torus_roadmap):
+    """Each aspect is one patch on the torus (the two-solution set is one
+    band): every same-branch pair is planned, and every path, checked in
+    closed form, stays on its branch."""
+    planner = Planner(torus_roadmap)
+    rng = np.random.default_rng(4)
+    planned = 0
+    while planned < 24:
+        q = rng.uniform(-math.pi, math.pi, (2, 2))
+        exists, plus, minus = reference_solutions(q[:, 0], q[:, 1])
+        branch = int(rng.integers(1, 3))
+        ends = (plus, minus)[branch - 1]
+        if not exists.all() or np.min(np.abs(reference_margin(ends, q[:, 0], q[:, 1]))) < 0.05:
+            continue
+        plan = planner.plan((*q[0], ends[0, 1]), (*q[1], ends[1, 1]))
+        assert plan.validation.ok
+        _assert_on_branch(plan.joints, branch)
+        planned += 1

@@ -89,7 +89,7 @@ __all__ = ["CacheWarning", "DEFAULT_MAX_BYTES", "STALE_STAGING_SECONDS", "defaul
 ALGORITHM_REVISION = 5
 # Bump when the files of an entry change, so old entries are misses (evicted in
 # their turn) rather than damaged entries.
-ENTRY_LAYOUT = 3
+ENTRY_LAYOUT = 4
 
 DEFAULT_MAX_BYTES = 4 * 2**30
 """Default bound of the cache's entries [bytes]."""

@@ -72,6 +72,9 @@ class NodeGraph(NamedTuple):
         Index of each node's patch, ascending.
     position : ndarray of int32, shape (n_nodes, d)
         Coordinates of the nodes' cells in half quanta (:func:`node_positions`).
+    turn : ndarray of int64, shape (d,)
+        The period of each axis in half quanta, 0 where it has none: along a
+        periodic axis a length is the shorter way round.
     """
 
     indptr: np.ndarray
@@ -80,6 +83,7 @@ class NodeGraph(NamedTuple):
     node_cell: np.ndarray
     node_patch: np.ndarray
     position: np.ndarray
+    turn: np.ndarray
 
 
 class NodeCosts(NamedTuple):
@@ -194,22 +198,27 @@ def node_positions(coords, quantum):
 
 
 @numba.njit(cache=True, inline="always")
-def _half_quanta(position, u, v):
-    """L1 distance of two nodes in half quanta."""
+def _half_quanta(position, turn, u, v):
+    """L1 distance of two nodes in half quanta, the shorter way round along
+    the axes with a ``turn``."""
     total = 0
     for k in range(position.shape[1]):
-        total += abs(np.int64(position[u, k]) - np.int64(position[v, k]))
+        length = abs(np.int64(position[u, k]) - np.int64(position[v, k]))
+        if turn[k] > 0:
+            length = min(length, turn[k] - length)
+        total += length
     return total
 
 
 @numba.njit(cache=True)
-def edge_quanta(indptr, indices, position):
+def edge_quanta(indptr, indices, position, turn):
     """Length of each edge of :func:`adjacency` in whole quanta (of
-    :func:`node_positions`), shape (indices.size,), uint16."""
+    :func:`node_positions`; ``turn`` as :class:`NodeGraph`'s), shape
+    (indices.size,), uint16."""
     out = np.empty(indices.size, np.uint16)
     for u in range(indptr.size - 1):
         for e in range(indptr[u], indptr[u + 1]):
-            out[e] = min(65535, _half_quanta(position, u, indices[e]) // 2)
+            out[e] = min(65535, _half_quanta(position, turn, u, indices[e]) // 2)
     return out
 
 
@@ -278,7 +287,7 @@ def _search(graph, costs, layer, sources, target, blocked, guide, deadline, work
     entries of ``touched``, and whether it stopped for the deadline."""
     # Unpacked once: the loop then reads plain local arrays, without the
     # reference counting of taking them out of a bundle at each use.
-    indptr, indices, quanta, node_cell, node_patch, position = graph
+    indptr, indices, quanta, node_cell, node_patch, position, turn = graph
     node_cost, node_margin, clearance, penalty = costs
     cost_floor, fields, to_gate_start, rest, landmark_start, landmark_goal = guide
     g, pred, closed, touched, entry_node, entry_next, waiting_node, waiting_key = work
@@ -362,7 +371,7 @@ def _search(graph, costs, layer, sources, target, blocked, guide, deadline, work
                 # a call passing these arrays would count references.
                 length = 0
                 if cost_floor:
-                    length = _half_quanta(position, v, goal)
+                    length = _half_quanta(position, turn, v, goal)
                     if there < last:
                         length = max(length, fields[to_gate_start[there] + v] + rest[there])
                     else:

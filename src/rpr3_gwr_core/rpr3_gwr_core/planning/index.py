@@ -41,7 +41,8 @@ _UNRESOLVED_DEPTH = 0.5
 INDEX_TYPES = {
     "pids": "<i8", "offsets": "<i8", "node_cell": "<i8", "node_slot": "<i8",
     "node_patch": "<i4", "node_margin": "<f8", "indptr": "<i8", "indices": "<i4",
-    "quanta": "<u2", "position": "<i4", "gate_pairs": "<i8", "gate_node_offsets": "<i8",
+    "quanta": "<u2", "position": "<i4", "turn": "<i8", "gate_pairs": "<i8",
+    "gate_node_offsets": "<i8",
     "gate_node_list": "<i8", "quantum": "<f8", "clearances": "<f8", "distances": "<i8",
     "weights": "<f8", "node_costs": "<i8", "cost_floors": "<i8",
 }
@@ -79,7 +80,8 @@ class PlanningIndex:
         self.node_slot = arrays["node_slot"]
         self.node_margin = arrays["node_margin"]
         self.graph = NodeGraph(arrays["indptr"], arrays["indices"], arrays["quanta"],
-                               arrays["node_cell"], arrays["node_patch"], arrays["position"])
+                               arrays["node_cell"], arrays["node_patch"], arrays["position"],
+                               arrays["turn"])
         self.quantum = float(arrays["quantum"][0])
         self.gate_pairs = arrays["gate_pairs"]
         self.clearances = tuple(arrays["clearances"].tolist())
@@ -237,6 +239,7 @@ def _graph_arrays(roadmap):
     grid = seg.field.grid
     quantum = _lattice_quantum(grid.steps)
     position = node_positions(grid.coordinates_of(node_cell), quantum)
+    turn = np.rint(2.0 * grid.periods / quantum).astype(np.int64)
     index_of = {pid: k for k, pid in enumerate(pids.tolist())}
     pairs = sorted({(index_of[a], index_of[b]) for a, b in seg.gates}
                    | {(index_of[b], index_of[a]) for a, b in seg.gates})
@@ -248,7 +251,8 @@ def _graph_arrays(roadmap):
         "node_patch": node_patch,
         "node_margin": np.abs(seg.field.margin[node_cell, node_slot]).astype(np.float64),
         "indptr": indptr, "indices": indices,
-        "quanta": edge_quanta(indptr, indices, position), "position": position,
+        "quanta": edge_quanta(indptr, indices, position, turn), "position": position,
+        "turn": turn,
         "gate_pairs": gate_pairs,
         "gate_node_offsets": np.concatenate(
             [[0], np.cumsum([a.size for a in lists])]).astype(np.int64),
@@ -349,7 +353,7 @@ def _check_index(roadmap, arrays):
     d = seg.field.grid.ndim
     n_weights, n_clearances = arrays["weights"].size, arrays["clearances"].size
     shapes = {"node_cell": (n,), "node_slot": (n,), "node_patch": (n,), "node_margin": (n,),
-              "indptr": (n + 1,), "quanta": indices.shape, "position": (n, d),
+              "indptr": (n + 1,), "quanta": indices.shape, "position": (n, d), "turn": (d,),
               "gate_pairs": (n_gates, 2), "gate_node_offsets": (n_gates + 1,),
               "quantum": (1,), "node_costs": (n_weights, n), "cost_floors": (n_weights, p)}
     wrong = [name for name, shape in shapes.items() if arrays[name].shape != shape]

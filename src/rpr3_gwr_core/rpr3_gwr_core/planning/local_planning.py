@@ -156,11 +156,12 @@ class LocalPlanner:
              for other in neighbours], dtype=np.int64) - offsets[last]
         landmark_goal = fields[landmark_start + target]
         rest = np.zeros(len(index), dtype=np.int64)
-        position = self.index.graph.position
+        position, turn = self.index.graph.position, self.index.graph.turn
         if len(index) > 1:
             entry = self.index.gate_nodes(self.index.pair(index[-1], index[-2]))
-            rest[-2] = np.min(np.abs(position[entry].astype(np.int64)
-                                     - position[target]).sum(axis=1))
+            length = np.abs(position[entry].astype(np.int64) - position[target])
+            length = np.where(turn > 0, np.minimum(length, turn - length), length)
+            rest[-2] = np.min(length.sum(axis=1))
             # The goal's own cost to that gate, within its patch, bounds
             # every path entering there; usually far tighter.
             through = landmark_goal[neighbours.index(index[-2])]

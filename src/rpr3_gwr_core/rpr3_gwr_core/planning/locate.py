@@ -161,7 +161,8 @@ def _joined_slot(roadmap, joints, pose, cell, min_margin, max_step):
     ``(joints, pose)`` lands on, in a patch and validated back; -1 if none."""
     field, seg = roadmap.field, roadmap.segmentation
     mechanism = field.mechanism
-    cell_joints = field.grid.joints_of(cell)
+    # A cell across a periodic axis' seam is reached by the short way round.
+    cell_joints = field.grid.nearest_joints(joints, field.grid.joints_of(cell))
     count = int(field.count[cell])
     if count == 0:
         return -1

@@ -471,8 +471,9 @@ class Planner:
         member = seg.patch[cells] == patches[:, None]
         sheet = seg.field.poses[cells, np.argmax(member, axis=1)]
         mechanism = self.roadmap.mechanism
-        verifiable = np.all(np.abs(joints - self._joints[cells]) < 1e-9, axis=1) \
-            & member.any(axis=1)
+        grid = self.roadmap.grid
+        verifiable = np.all(np.abs(joints - grid.nearest_joints(joints, self._joints[cells]))
+                            < 1e-9, axis=1) & member.any(axis=1)
         off = verifiable & (mechanism.pose_distance(result.poses, sheet)
                             > _STRAYED * mechanism.scale)
         off[0] = False
@@ -488,11 +489,15 @@ class Planner:
                              self.max_step)
 
     def _waypoints(self, s, g, local):
-        """Exact start, the cell centres, exact goal; repeated points dropped.
+        """Exact start, the cell centres, exact goal; repeated points dropped;
+        continuous along periodic axes (from the start's values, so the goal's
+        may differ from those asked by whole turns).
 
         Returns the legs, the patch of each waypoint and its cell (-1 for
         the exact start and goal)."""
         joints = np.vstack([s.joints, self._joints[local.cells], g.joints])
+        if self.roadmap.grid.periodic:
+            joints = self.roadmap.grid.unwrap(joints)
         patches = np.concatenate([[s.patch], local.patches, [g.patch]])
         cells = np.concatenate([[-1], local.cells, [-1]])
         keep = np.ones(len(joints), dtype=bool)

@@ -131,13 +131,13 @@ def shortcut_path(points, patches, margins, clearance, split, samples_per_step, 
 def _clear(a, b, patch, floor, samples_per_step, step, lattice, patch_of, margin, point):
     """Whether the segment from ``a`` to ``b`` passes (:func:`segments_clear`);
     ``point`` is work space."""
-    low, steps, shape, index, base_steps, refinement = lattice
+    low, steps, shape, index, base_steps, refinement, periods = lattice
     span = np.max(np.abs(b - a)) / step
     count = max(2, int(span * samples_per_step) + 1)
     for n in range(count):
         t = n / (count - 1)
         point[:] = a * (1 - t) + b * t
-        cell = lattice_cell(point, low, steps, shape, index, base_steps, refinement)
+        cell = lattice_cell(point, low, steps, shape, index, base_steps, refinement, periods)
         if cell < 0 or not _keeps(patch_of[cell], margin[cell], patch, floor):
             return False
     return True

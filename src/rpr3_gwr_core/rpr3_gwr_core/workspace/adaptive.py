@@ -95,6 +95,9 @@ class AdaptiveGrid(GridBase):
     def __init__(self, base, refinement, blocks):
         if not isinstance(base, Grid):
             raise InvalidInputError(f"an adaptive grid refines a Grid, got {type(base).__name__}")
+        if base.periodic:
+            # Its blocks, faces and lookups do not wrap.
+            raise InvalidInputError("an adaptive grid refines grids without periodic axes")
         if (isinstance(refinement, bool) or not isinstance(refinement, numbers.Integral)
                 or refinement < 2):
             raise InvalidInputError(f"refinement is an integer >= 2, got {refinement!r}")
@@ -180,7 +183,7 @@ class AdaptiveGrid(GridBase):
         fine lattice, the cells' fine indices and the base points."""
         return (np.array([a.low for a in self.axes]), np.array(self.steps),
                 np.array(self.fine_shape), self._index, np.array(self.base.steps),
-                self.refinement)
+                self.refinement, self.periods)
 
     def cell_of(self, joints):
         """The cell of a joint vector (:meth:`cells_of`).

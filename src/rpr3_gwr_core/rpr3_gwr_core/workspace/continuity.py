@@ -72,8 +72,10 @@ def _continue_into(field, joints, src, dst):
     for substeps in _SUBSTEPS:
         if rows.size == 0:
             break
-        pose = _track(mechanism, field.poses[src[rows], slots], joints[src[rows]],
-                      joints[dst[rows]], substeps)
+        # Across a periodic axis' seam the move is one step, not a turn back.
+        joints_dst = field.grid.nearest_joints(joints[src[rows]], joints[dst[rows]])
+        pose = _track(mechanism, field.poses[src[rows], slots], joints[src[rows]], joints_dst,
+                      substeps)
         dist = mechanism.pose_distance(field.poses[dst[rows]], pose[:, None, :])
         dist = np.where(np.isnan(dist), np.inf, dist)
         best = np.argmin(dist, axis=1)
@@ -82,7 +84,7 @@ def _continue_into(field, joints, src, dst):
         # aspect: a step that jumped across a fold lands on the other sign.
         target_sign = np.sign(field.margin[dst[rows], best])
         same_aspect = ((np.sign(field.margin[src[rows], slots]) == target_sign)
-                       & (np.sign(mechanism.margin(pose, joints[dst[rows]])) == target_sign))
+                       & (np.sign(mechanism.margin(pose, joints_dst)) == target_sign))
         ok = landed & same_aspect
         target[rows[ok], slots[ok]] = best[ok]
         rows, slots = rows[~ok], slots[~ok]
@@ -149,7 +151,7 @@ def _screened(field, joints, lower, upper):
         field.margin[upper[same]][rows, slots])
     for src, dst in ((lower[same], upper[same]), (upper[same], lower[same])):
         pose = mechanism.predict(field.poses[src[rows], slots], joints[src[rows]],
-                                 joints[dst[rows]])
+                                 field.grid.nearest_joints(joints[src[rows]], joints[dst[rows]]))
         err = mechanism.pose_distance(field.poses[dst[rows], slots], pose) / scale
         gap = field.separation[dst[rows], slots] / scale
         bad |= ~(err < _SCREEN_TOL) | ~(gap > _SCREEN_RATIO * err)

@@ -1,7 +1,11 @@
 """Uniform grids over any subset of a mechanism's joints, the others fixed.
 
 A grid is a list of axes, each a joint index with a range and a step; the
-other joints keep fixed values.  The paper's grid is two axes (rho2 and rho3
+other joints keep fixed values.  An axis over a revolute joint may be
+periodic: its range is one full turn, and its last and first cells are
+neighbours, so faces, distances and cell lookups wrap around it; joint
+values along a path stay continuous (unwrapped) and are brought into the
+axis range only to find their cells.  The paper's grid is two axes (rho2 and rho3
 in [0, 50], step 0.125) at fixed rho1 = 17; the full 3-DOF roadmap is three
 axes.  Cells are the grid's sample points, numbered row-major over the axes
 in their order: cell ``(i, j)`` of a 2-D grid is ``i * n_1 + j``.  A grid
@@ -59,18 +63,23 @@ class Axis:
         Inclusive range [joint unit].
     step : float
         Spacing of its cells [joint unit].
+    periodic : bool
+        A full turn of a revolute joint [rad]: ``high + step - low`` is
+        ``2 pi``, and the cell after ``high`` is ``low``.
 
     Raises
     ------
     InvalidInputError
-        If a value is not a finite number, ``step <= 0``, ``high < low``, or
-        the axis has more than :data:`MAX_GRID_CELLS` cells.
+        If a value is not a finite number, ``step <= 0``, ``high < low``, the
+        axis has more than :data:`MAX_GRID_CELLS` cells, or a periodic axis
+        does not span one turn in whole steps.
     """
 
     joint: int
     low: float
     high: float
     step: float
+    periodic: bool = False
 
     def __post_init__(self):
         if isinstance(self.joint, bool) or not isinstance(self.joint, numbers.Integral) \
@@ -91,6 +100,17 @@ class Axis:
         object.__setattr__(self, "joint", int(self.joint))
         for name, value in (("low", low), ("high", high), ("step", step)):
             object.__setattr__(self, name, value)
+        if not isinstance(self.periodic, bool):
+            raise InvalidInputError(f"periodic must be True or False, got {self.periodic!r}")
+        if self.periodic and abs(self.count * step - 2 * math.pi) > 1e-9 * 2 * math.pi:
+            raise InvalidInputError(
+                f"a periodic axis spans one turn: {self.count} cells of {step:g} rad from "
+                f"{low:g} to {high:g} cover {self.count * step:g} rad, not 2 pi")
+
+    @property
+    def period(self):
+        """``2 pi`` for a periodic axis, else 0 [joint unit]."""
+        return 2 * math.pi if self.periodic else 0.0
 
     @property
     def count(self):
@@ -132,6 +152,49 @@ class GridBase:
         """Joint index of each axis."""
         return tuple(a.joint for a in self.axes)
 
+    @property
+    def periods(self):
+        """Period of each axis, 0 where it has none, shape (ndim,) [joint unit]."""
+        return np.array([a.period for a in self.axes])
+
+    @property
+    def periodic(self):
+        """Whether any axis is periodic."""
+        return any(a.periodic for a in self.axes)
+
+    def nearest_joints(self, reference, joints):
+        """``joints`` moved by whole turns along the periodic axes to lie
+        nearest ``reference`` (both shape (..., n_joints), broadcast): the
+        end of a continuous move from ``reference``."""
+        joints = np.array(joints, dtype=float)
+        for axis in self.axes:
+            if axis.periodic:
+                offset = joints[..., axis.joint] - np.asarray(reference)[..., axis.joint]
+                joints[..., axis.joint] -= axis.period * np.round(offset / axis.period)
+        return joints
+
+    def unwrap(self, joints):
+        """A sequence of joint vectors, shape (n, n_joints), made continuous
+        along the periodic axes: each moved by whole turns to lie nearest the
+        one before it (the first stays)."""
+        joints = np.array(joints, dtype=float)
+        for axis in self.axes:
+            if axis.periodic:
+                step = np.diff(joints[:, axis.joint])
+                step -= axis.period * np.round(step / axis.period)
+                joints[1:, axis.joint] = joints[0, axis.joint] + np.cumsum(step)
+        return joints
+
+    def _wrapped(self, values):
+        """Axis values (shape (..., ndim)) of periodic axes brought into
+        ``[low - step / 2, low - step / 2 + period)``."""
+        values = np.array(values, dtype=float)
+        for k, axis in enumerate(self.axes):
+            if axis.periodic:
+                start = axis.low - axis.step / 2
+                values[..., k] = start + np.remainder(values[..., k] - start, axis.period)
+        return values
+
     def fixed_value(self, joint):
         """Value of a fixed joint."""
         return dict(self.fixed)[joint]
@@ -142,6 +205,7 @@ class GridBase:
         values = [float(joints[a.joint]) for a in self.axes]
         if not all(math.isfinite(v) for v in values):
             raise InvalidInputError(f"cell_of needs finite joints, got {values}")
+        values = self._wrapped(values).tolist()
         for value, axis in zip(values, self.axes):
             # Compared as floats: a huge joint value would overflow int().
             k = (value - axis.low) / axis.step
@@ -289,12 +353,21 @@ class Grid(GridBase):
         lattice point is a cell, numbered row-major."""
         steps = np.array(self.steps)
         return (np.array([a.low for a in self.axes]), steps, np.array(self.shape),
-                np.zeros(0, dtype=np.int64), steps, 1)
+                np.zeros(0, dtype=np.int64), steps, 1, self.periods)
 
     def pairs(self):
         """Face-adjacent cell pairs, one ``(lower, upper)`` pair of flat-index
-        arrays per axis, ``upper = lower + stride`` of that axis."""
-        return neighbour_pairs(self.shape)
+        arrays per axis, ``upper = lower + stride`` of that axis; along a
+        periodic axis followed by the pairs across its seam (``lower`` the
+        last cell, ``upper`` the first)."""
+        pairs = neighbour_pairs(self.shape)
+        index = np.arange(self.size).reshape(self.shape)
+        for k, axis in enumerate(self.axes):
+            if axis.periodic:
+                lower, upper = pairs[k]
+                pairs[k] = (np.concatenate([lower, np.take(index, -1, axis=k).ravel()]),
+                            np.concatenate([upper, np.take(index, 0, axis=k).ravel()]))
+        return pairs
 
     def pair_lengths(self):
         """Per axis, the length of each pair of :meth:`pairs` [joint unit]."""
@@ -331,7 +404,15 @@ class Grid(GridBase):
         mask = np.zeros(self.shape, dtype=bool)
         mask.flat[cells] = True
         inner = tuple(slice(1, -1) for _ in self.shape)
-        return distance_transform_edt(np.pad(mask, 1))[inner].ravel()[cells]
+        depth = distance_transform_edt(np.pad(mask, 1))[inner]
+        if self.periodic:
+            # Copies on both sides of each seam: a distance across it is at
+            # most the axis' length.
+            tiles = [(n, n) if a.periodic else (0, 0) for n, a in zip(self.shape, self.axes)]
+            padded = np.pad(np.pad(mask, tiles, mode="wrap"), 1)
+            middle = tuple(slice(1 + t, 1 + t + n) for (t, _), n in zip(tiles, self.shape))
+            depth = distance_transform_edt(padded)[middle]
+        return depth.ravel()[cells]
 
     def cells_in_box(self, point, radius):
         """Cells whose axis values lie within ``radius`` steps of a point along
@@ -349,10 +430,12 @@ class Grid(GridBase):
         -------
         ndarray of int
         """
+        point = self._wrapped(point)
         index = _box_points(point, radius, np.array([a.low for a in self.axes]),
-                            np.array(self.steps), np.array(self.shape))
-        cells = np.ravel_multi_index(tuple(index.T), self.shape)
-        return _within_box(cells, self.coordinates_of(cells), point, radius, self.steps)
+                            np.array(self.steps), np.array(self.shape), self.periods > 0)
+        cells = np.unique(np.ravel_multi_index(tuple(index.T), self.shape))
+        return _within_box(cells, self.coordinates_of(cells), point, radius, self.steps,
+                           self.periods)
 
     def coordinates_of(self, cells):
         """Axis values of cells, shape (len(cells), ndim)."""
@@ -366,14 +449,19 @@ class Grid(GridBase):
         -------
         list of int
         """
-        here = np.array([(joints[a.joint] - a.low) / a.step for a in self.axes])
+        values = self._wrapped([joints[a.joint] for a in self.axes])
+        here = np.array([(v - a.low) / a.step for v, a in zip(values, self.axes)])
         reach = int(math.ceil(radius))
         return _nearest_points(here, np.array(self.shape), float(radius),
-                               lattice_box(self.ndim, -reach, reach)).tolist()
+                               lattice_box(self.ndim, -reach, reach),
+                               self.periods > 0).tolist()
 
     def to_dict(self):
         """Plain-data form, for JSON and cache keys."""
-        return {"axes": [{"joint": a.joint, "min": a.low, "max": a.high, "step": a.step}
+        # "periodic" only where set: the documents (and cache keys) of other
+        # grids stay as they were.
+        return {"axes": [{"joint": a.joint, "min": a.low, "max": a.high, "step": a.step,
+                          **({"periodic": True} if a.periodic else {})}
                          for a in self.axes],
                 "fixed": [{"joint": j, "value": v} for j, v in self.fixed]}
 
@@ -381,7 +469,8 @@ class Grid(GridBase):
     def from_dict(cls, data):
         """Inverse of :meth:`to_dict`."""
         try:
-            return cls(axes=tuple(Axis(a["joint"], a["min"], a["max"], a["step"])
+            return cls(axes=tuple(Axis(a["joint"], a["min"], a["max"], a["step"],
+                                       a.get("periodic", False))
                                   for a in data["axes"]),
                        fixed=tuple((f["joint"], f["value"]) for f in data["fixed"]))
         except (KeyError, TypeError) as exc:
@@ -425,23 +514,30 @@ def check_roadmap_grid(mechanism, grid, min_region_cells=8):
             "its roadmap would be empty")
 
 
-def _box_points(point, radius, low, steps, shape):
+def _box_points(point, radius, low, steps, shape, periodic=None):
     """Lattice indices within ``radius`` steps of ``point`` on every axis (one
     more on each side, against rounding; the caller filters exactly), clipped
-    to ``shape``, shape (m, ndim)."""
+    to ``shape`` (wrapped along the ``periodic`` axes), shape (m, ndim)."""
+    periodic = np.zeros(len(shape), bool) if periodic is None else periodic
     here = (np.asarray(point, dtype=float) - low) / steps
-    first = np.maximum(np.floor(here - radius).astype(np.int64) - 1, 0)
-    last = np.minimum(np.ceil(here + radius).astype(np.int64) + 1, shape - 1)
+    first = np.floor(here - radius).astype(np.int64) - 1
+    last = np.ceil(here + radius).astype(np.int64) + 1
+    first = np.where(periodic, np.maximum(first, last - shape + 1), np.maximum(first, 0))
+    last = np.where(periodic, last, np.minimum(last, shape - 1))
     if np.any(last < first):
         return np.zeros((0, len(shape)), dtype=np.int64)
-    axes = [np.arange(a, b + 1) for a, b in zip(first, last)]
+    axes = [np.arange(a, b + 1) % n for a, b, n in zip(first, last, shape)]
     return np.stack([m.ravel() for m in np.meshgrid(*axes, indexing="ij")], axis=-1)
 
 
-def _within_box(cells, coordinates, point, radius, steps):
+def _within_box(cells, coordinates, point, radius, steps, periods=None):
     """The cells whose coordinates lie within ``radius`` steps of ``point``
-    on every axis, ascending."""
-    inside = np.max(np.abs(coordinates - point) / np.array(steps), axis=1) <= radius
+    on every axis (across the seams of axes with a period), ascending."""
+    offset = coordinates - point
+    if periods is not None:
+        offset = np.where(periods > 0, offset - periods * np.round(
+            offset / np.where(periods > 0, periods, 1.0)), offset)
+    inside = np.max(np.abs(offset) / np.array(steps), axis=1) <= radius
     return np.sort(cells[inside])
 
 
@@ -456,10 +552,10 @@ def lattice_box(ndim, first, last):
 
 
 @numba.njit(cache=True)
-def _nearest_points(here, shape, radius, box):
+def _nearest_points(here, shape, radius, box, periodic):
     """Row-major flat indices of the lattice points ``round(here) + box`` in
-    ``shape`` within ``radius`` of ``here`` (in steps), nearest first, ties
-    in index order."""
+    ``shape`` (wrapped along the ``periodic`` axes) within ``radius`` of
+    ``here`` (in steps), nearest first, ties in index order."""
     centre = np.rint(here).astype(np.int64)
     flat = np.empty(box.shape[0], np.int64)
     distance = np.empty(box.shape[0])
@@ -468,11 +564,13 @@ def _nearest_points(here, shape, radius, box):
         index, squared = 0, 0.0
         for a in range(here.size):
             i = centre[a] + box[k, a]
-            if i < 0 or i >= shape[a]:
+            squared += (i - here[a]) ** 2
+            if periodic[a]:
+                i %= shape[a]
+            elif i < 0 or i >= shape[a]:
                 index = -1
                 break
             index = index * shape[a] + i
-            squared += (i - here[a]) ** 2
         if index >= 0 and math.sqrt(squared) <= radius:
             flat[count], distance[count] = index, math.sqrt(squared)
             count += 1
@@ -482,25 +580,30 @@ def _nearest_points(here, shape, radius, box):
 
 
 @numba.njit(cache=True)
-def lattice_cell(point, low, steps, shape, index, base_steps, refinement):
+def lattice_cell(point, low, steps, shape, index, base_steps, refinement, periods):
     """The cell of one point (:meth:`GridBase.cells_of`), -1 outside.
 
     ``low``, ``steps`` and ``shape`` describe the lattice; ``index`` holds
     the ascending flat lattice index of each cell, or nothing when every
     lattice point is a cell in row-major order; ``base_steps`` and
     ``refinement`` give the base points (every ``refinement``-th lattice
-    point), which are always cells.
+    point), which are always cells; ``periods`` the period of each axis
+    (0: none), along which the point is wrapped first.
     """
     flat = 0
     coarse = 0
     for k in range(point.size):
-        nearest = np.rint((point[k] - low[k]) / steps[k])
+        value = point[k]
+        if periods[k] > 0:
+            start = low[k] - steps[k] / 2
+            value = start + (value - start) % periods[k]
+        nearest = np.rint((value - low[k]) / steps[k])
         # Compared as floats: NaN and huge values fall outside.
         if not 0.0 <= nearest <= shape[k] - 1:
             return -1
         flat = flat * shape[k] + int(nearest)
         top = (shape[k] - 1) // refinement
-        base = min(max(np.rint((point[k] - low[k]) / base_steps[k]), 0.0), float(top))
+        base = min(max(np.rint((value - low[k]) / base_steps[k]), 0.0), float(top))
         coarse = coarse * shape[k] + int(base) * refinement
     if index.size == 0:
         return flat
@@ -511,8 +614,9 @@ def lattice_cell(point, low, steps, shape, index, base_steps, refinement):
 
 
 @numba.njit(cache=True)
-def _lattice_cells(points, low, steps, shape, index, base_steps, refinement):
+def _lattice_cells(points, low, steps, shape, index, base_steps, refinement, periods):
     out = np.empty(points.shape[0], dtype=np.int64)
     for n in range(points.shape[0]):
-        out[n] = lattice_cell(points[n], low, steps, shape, index, base_steps, refinement)
+        out[n] = lattice_cell(points[n], low, steps, shape, index, base_steps, refinement,
+                              periods)
     return out

@@ -1,0 +1,85 @@
+"""Periodic grid axes (a revolute joint's full turn): faces, cell lookups,
+distances and boxes wrap around the seam, and grids without them are as
+before.  References are written here: the seam's neighbours by index
+arithmetic, the distances by rolling the grid so nothing crosses the seam."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.ndimage import distance_transform_edt
+
+from rpr3_gwr_core.exceptions import InvalidInputError
+from rpr3_gwr_core.workspace.adaptive import AdaptiveGrid
+from rpr3_gwr_core.workspace.grid import Axis, Grid
+
+N = 24
+STEP = 2 * math.pi / N
+
+
+def turn(joint):
+    return Axis(joint, -math.pi, math.pi - STEP, STEP, periodic=True)
+
+
+@pytest.fixture
+def grid():
+    """A periodic axis (joint 0) and a plain one (joint 1, 10 cells)."""
+    return Grid(axes=(turn(0), Axis(1, 0.0, 9.0, 1.0)))
+
+
+def test_a_periodic_axis_spans_one_turn():
+    assert turn(0).count == N and turn(0).period == 2 * math.pi
+    with pytest.raises(InvalidInputError, match="one turn"):
+        Axis(0, -math.pi, math.pi, STEP, periodic=True)
+    with pytest.raises(InvalidInputError, match="True or False"):
+        Axis(0, -math.pi, math.pi - STEP, STEP, periodic=1)
+
+
+def test_documents_name_periodic_axes_only():
+    plain = Grid(axes=(Axis(0, 0.0, 9.0, 1.0),))
+    assert plain.to_dict() == {"axes": [{"joint": 0, "min": 0.0, "max": 9.0, "step": 1.0}],
+                               "fixed": []}
+    periodic = Grid(axes=(turn(0),), fixed=((1, 0.5),))
+    assert periodic.to_dict()["axes"][0]["periodic"] is True
+    assert Grid.from_dict(periodic.to_dict()) == periodic
+
+
+def test_faces_cross_the_seam(grid):
+    lower, upper = grid.pairs()[0]
+    assert lower.size == N * 10
+    seam = set(zip(lower.tolist(), upper.tolist())) - {(c, c + 10) for c in range((N - 1) * 10)}
+    assert seam == {((N - 1) * 10 + j, j) for j in range(10)}
+    assert grid.pairs()[1][0].size == N * 9
+    assert all(m.size == N * 10 for m in grid.face_measures()[:1])
+
+
+@pytest.mark.parametrize("value, row", [(math.pi - STEP, N - 1), (math.pi - 0.4 * STEP, 0),
+                                        (math.pi + 0.2 * STEP, 0), (-math.pi - 0.6 * STEP, N - 1),
+                                        (3 * math.pi + STEP, 1), (-5 * math.pi, 0)])
+def test_cells_are_found_across_the_seam(grid, value, row):
+    assert grid.cell_of((value, 3.0)) == row * 10 + 3
+    assert grid.cells_of(np.array([[value, 3.0]])).tolist() == [row * 10 + 3]
+
+
+def test_distances_inside_a_set_wrap(grid):
+    mask = np.zeros(grid.shape, dtype=bool)
+    mask[[N - 3, N - 2, N - 1, 0, 1, 2], 2:8] = True
+    depth = grid.depth(np.flatnonzero(mask))
+    # Rolled so the set lies away from the seam, nothing wraps.
+    rolled = np.roll(mask, 3, axis=0)
+    reference = np.roll(distance_transform_edt(np.pad(rolled, 1))[1:-1, 1:-1], -3, axis=0)
+    np.testing.assert_allclose(depth, reference[mask])
+    assert depth.max() == 3.0
+
+
+def test_cells_near_and_in_a_box_wrap(grid):
+    near = grid.cells_near((math.pi - 0.5 * STEP, 4.0), 1.0)
+    assert {(N - 1) * 10 + 4, 4} <= set(near)
+    box = grid.cells_in_box(np.array([-math.pi, 4.0]), 1.5)
+    rows = sorted({int(c) // 10 for c in box})
+    assert rows == [0, 1, N - 1]
+
+
+def test_adaptive_grids_refuse_periodic_axes(grid):
+    with pytest.raises(InvalidInputError, match="periodic"):
+        AdaptiveGrid(grid, 2, [])
