@@ -1,15 +1,15 @@
 """Uniform grids over any subset of a mechanism's joints, the others fixed.
 
 A grid is a list of axes, each a joint index with a range and a step; the
-other joints keep fixed values.  An axis over a revolute joint may be
-periodic: its range is one full turn, and its last and first cells are
-neighbours, so faces, distances and cell lookups wrap around it; joint
-values along a path stay continuous (unwrapped) and are brought into the
-axis range only to find their cells.  The paper's grid is two axes (rho2 and rho3
+other joints keep fixed values.  The paper's grid is two axes (rho2 and rho3
 in [0, 50], step 0.125) at fixed rho1 = 17; the full 3-DOF roadmap is three
-axes.  Cells are the grid's sample points, numbered row-major over the axes
-in their order: cell ``(i, j)`` of a 2-D grid is ``i * n_1 + j``.  A grid
-has at most :data:`MAX_GRID_CELLS` cells, and :func:`check_roadmap_grid`
+axes.  An axis over a revolute joint may be periodic: its range is one full
+turn, and its last and first cells are neighbours, so faces, distances and
+cell lookups wrap around it; joint values along a path stay continuous
+(unwrapped) and are brought into the axis range only to find their cells.
+Cells are the grid's sample points, numbered row-major over the axes in
+their order: cell ``(i, j)`` of a 2-D grid is ``i * n_1 + j``.  A grid has
+at most :data:`MAX_GRID_CELLS` cells, and :func:`check_roadmap_grid`
 tells before a build whether a grid can give a roadmap at all.
 """
 
@@ -170,7 +170,7 @@ class GridBase:
         for axis in self.axes:
             if axis.periodic:
                 offset = joints[..., axis.joint] - np.asarray(reference)[..., axis.joint]
-                joints[..., axis.joint] -= axis.period * np.round(offset / axis.period)
+                joints[..., axis.joint] += _shortest(offset, axis.period) - offset
         return joints
 
     def unwrap(self, joints):
@@ -180,8 +180,7 @@ class GridBase:
         joints = np.array(joints, dtype=float)
         for axis in self.axes:
             if axis.periodic:
-                step = np.diff(joints[:, axis.joint])
-                step -= axis.period * np.round(step / axis.period)
+                step = _shortest(np.diff(joints[:, axis.joint]), axis.period)
                 joints[1:, axis.joint] = joints[0, axis.joint] + np.cumsum(step)
         return joints
 
@@ -403,16 +402,12 @@ class Grid(GridBase):
         """
         mask = np.zeros(self.shape, dtype=bool)
         mask.flat[cells] = True
-        inner = tuple(slice(1, -1) for _ in self.shape)
-        depth = distance_transform_edt(np.pad(mask, 1))[inner]
-        if self.periodic:
-            # Copies on both sides of each seam: a distance across it is at
-            # most the axis' length.
-            tiles = [(n, n) if a.periodic else (0, 0) for n, a in zip(self.shape, self.axes)]
-            padded = np.pad(np.pad(mask, tiles, mode="wrap"), 1)
-            middle = tuple(slice(1 + t, 1 + t + n) for (t, _), n in zip(tiles, self.shape))
-            depth = distance_transform_edt(padded)[middle]
-        return depth.ravel()[cells]
+        # Copies on both sides of each periodic axis' seam: a distance across
+        # it is at most the axis' length.
+        tiles = [(n, n) if a.periodic else (0, 0) for n, a in zip(self.shape, self.axes)]
+        padded = np.pad(np.pad(mask, tiles, mode="wrap"), 1)
+        middle = tuple(slice(1 + t, 1 + t + n) for (t, _), n in zip(tiles, self.shape))
+        return distance_transform_edt(padded)[middle].ravel()[cells]
 
     def cells_in_box(self, point, radius):
         """Cells whose axis values lie within ``radius`` steps of a point along
@@ -535,10 +530,17 @@ def _within_box(cells, coordinates, point, radius, steps, periods=None):
     on every axis (across the seams of axes with a period), ascending."""
     offset = coordinates - point
     if periods is not None:
-        offset = np.where(periods > 0, offset - periods * np.round(
-            offset / np.where(periods > 0, periods, 1.0)), offset)
+        offset = _shortest(offset, periods)
     inside = np.max(np.abs(offset) / np.array(steps), axis=1) <= radius
     return np.sort(cells[inside])
+
+
+def _shortest(offset, period):
+    """Offsets moved by whole periods into ``[-period / 2, period / 2]``;
+    unchanged where the period is 0 (broadcast)."""
+    period = np.asarray(period, dtype=float)
+    turns = np.round(offset / np.where(period > 0, period, 1.0))
+    return offset - np.where(period > 0, period * turns, 0.0)
 
 
 @functools.lru_cache(maxsize=16)
