@@ -77,6 +77,24 @@ def _duration(text):
     return value
 
 
+def _fixed_joint(text):
+    """``NAME=VALUE`` of ``--fix``."""
+    name, equals, value = text.partition("=")
+    if not equals or not name:
+        raise argparse.ArgumentTypeError(f"{text!r} is not NAME=VALUE")
+    return name, _finite(value)
+
+
+def _mechanism_options(command):
+    command.add_argument("--mechanism", metavar="FILE.yaml",
+                         help="a robot of your own (config/*.yaml): the roadmap covers the "
+                              "file's box of joints instead of the paper's 3-RPR slice")
+    command.add_argument("--fix", type=_fixed_joint, action="append", default=[],
+                         metavar="NAME=VALUE",
+                         help="with --mechanism: a joint held fixed (repeatable); the others "
+                              "are the roadmap's axes")
+
+
 def _figure(path):
     """A figure file whose extension, if any, names a format matplotlib writes
     (checked before anything is built)."""
@@ -97,11 +115,14 @@ def _parser():
     for name in ("rho1", "rho2", "rho3"):
         dk.add_argument(name, type=_leg)
     roadmap = sub.add_parser("roadmap", help="build the roadmap and print a JSON summary")
-    roadmap.add_argument("--rho1", type=_leg, default=17.0)
+    # The paper's slice; defaults filled in by the command, so that a
+    # --mechanism run can refuse them.
+    roadmap.add_argument("--rho1", type=_leg, help="default 17")
     for leg in ("--rho2", "--rho3"):
-        roadmap.add_argument(leg, type=_leg, nargs=2, default=(0.0, 50.0),
-                             metavar=("MIN", "MAX"))
-    roadmap.add_argument("--step", type=_finite, default=0.125)
+        roadmap.add_argument(leg, type=_leg, nargs=2, metavar=("MIN", "MAX"),
+                             help="default 0 50")
+    roadmap.add_argument("--step", type=_finite, help="default 0.125")
+    _mechanism_options(roadmap)
     roadmap.add_argument("--method", choices=("components", "rds"), default="components")
     roadmap.add_argument("-o", "--output", help="write the full roadmap JSON (with field) here")
     roadmap.add_argument("--gexf", help="write the roadmap graph as GEXF here")
@@ -117,11 +138,14 @@ def _parser():
                          help="with --full: rho1 of the slice figure")
     roadmap.add_argument("--cache-dir", default=default_cache_dir())
     plan = sub.add_parser("plan", help="plan a singularity-free path between two configurations")
-    plan.add_argument("--rho1", type=_leg, default=17.0)
+    plan.add_argument("--rho1", type=_leg, help="default 17")
+    _mechanism_options(plan)
     plan.add_argument("--full", action="store_true",
                       help="plan on the full 3-DOF roadmap: --start and --goal give rho1 first")
     plan.add_argument("--start", type=_finite, nargs="+", required=True,
-                      metavar="[RHO1] RHO2 RHO3 ALPHA_DEG")
+                      metavar="[RHO1] RHO2 RHO3 ALPHA_DEG",
+                      help="with --mechanism: every joint, then the mode coordinate "
+                           "(angles in radians)")
     plan.add_argument("--goal", type=_finite, nargs="+", required=True,
                       metavar="[RHO1] RHO2 RHO3 ALPHA_DEG")
     plan.add_argument("--smooth", action="store_true", help="shortcut and round the path")
@@ -133,6 +157,9 @@ def _parser():
                       help="joint acceleration limit [length unit/s^2]")
     plan.add_argument("--alpha-tol-deg", type=_finite, default=1.0,
                       help="tolerance on the start and goal orientations [deg]")
+    plan.add_argument("--mode-tol", type=_finite,
+                      help="with --mechanism: tolerance on the mode coordinate [its unit, "
+                           "radians for an angle]")
     plan.add_argument("--time-limit", type=_duration, metavar="SECONDS",
                       help="stop planning after this long (the roadmap loaded): the valid path "
                            "found by then, or a TIMEOUT error")

@@ -76,8 +76,14 @@ def _full_roadmap(cache_dir):
 def _roadmap(args):
     from .export import roadmap_summary, roadmap_to_gexf, roadmap_to_json
 
+    _paper_slice_options(args, ("rho1", "rho2", "rho3", "step"))
     start = time.perf_counter()
-    if args.full:
+    if args.mechanism is not None:
+        mechanism, grid = _file_roadmap(args)
+        roadmap, hit = cached_roadmap(mechanism, grid, args.cache_dir, _Progress(sys.stderr))
+        if args.slice_figure:
+            raise InvalidInputError("--slice-figure needs --full")
+    elif args.full:
         if args.field_figure:
             raise InvalidInputError("--field-figure draws 2-D grids: with --full use "
                                     "--slice-figure")
@@ -124,7 +130,42 @@ def _save(path, content, dpi=120):
         raise OSError(exc.errno, exc.strerror or str(exc), exc.filename or path) from None
 
 
+def _paper_slice_options(args, names):
+    """Refuse the paper's slice options beside ``--mechanism``, and give the
+    others their defaults (the paper's slice: rho1 = 17, legs in [0, 50],
+    step 0.125)."""
+    given = [f"--{name.replace('_', '-')}" for name in names
+             if getattr(args, name, None) is not None]
+    if args.mechanism is not None:
+        if given or getattr(args, "full", False):
+            raise InvalidInputError(f"{', '.join(given) or '--full'}: the paper's 3-RPR; with "
+                                    "--mechanism the grid is the file's box and --fix")
+        return
+    if args.fix:
+        raise InvalidInputError("--fix needs --mechanism")
+    defaults = {"rho1": 17.0, "rho2": (0.0, 50.0), "rho3": (0.0, 50.0), "step": 0.125}
+    for name in names:
+        if getattr(args, name) is None:
+            setattr(args, name, defaults[name])
+
+
+def _file_roadmap(args):
+    """The mechanism of ``--mechanism`` and the grid of its box and ``--fix``."""
+    from .mechanism_file import load_mechanism_file
+
+    described = load_mechanism_file(args.mechanism)
+    grid = described.grid(dict(args.fix))
+    check_roadmap_grid(described.mechanism, grid)
+    return described.mechanism, grid
+
+
 def _plan(args):
+    _paper_slice_options(args, ("rho1",))
+    if args.mechanism is not None:
+        return _plan_on_file(args)
+    if args.mode_tol is not None:
+        raise InvalidInputError("--mode-tol needs --mechanism; the paper's 3-RPR takes "
+                                "--alpha-tol-deg")
     given = 4 if args.full else 3
     for name in ("start", "goal"):
         if len(getattr(args, name)) != given:
@@ -147,6 +188,30 @@ def _plan(args):
         roadmap_doc = {"mechanism": PAPER_GEOMETRY.to_dict(), "grid": grid.to_dict()}
     start = (*start[:3], math.radians(start[3]))
     goal = (*goal[:3], math.radians(goal[3]))
+    return _answer(args, roadmap, index, start, goal, options, roadmap_doc)
+
+
+def _plan_on_file(args):
+    mechanism, grid = _file_roadmap(args)
+    start, goal = tuple(args.start), tuple(args.goal)
+    for name, values in (("start", start), ("goal", goal)):
+        if len(values) != mechanism.n_joints + 1:
+            raise InvalidInputError(
+                f"--{name} takes {' '.join(n.upper() for n in mechanism.joint_names)} and the "
+                f"mode coordinate {mechanism.pose_names[mechanism.mode_coordinate].upper()} "
+                "(angles in radians)")
+    tolerance = {} if args.mode_tol is None else {"mode_tol": args.mode_tol}
+    options = PlanOptions(smooth=args.smooth, weighted=args.weighted,
+                          feasibility_only=args.feasibility_only,
+                          max_velocity=args.max_velocity, max_acceleration=args.max_acceleration,
+                          **tolerance)
+    roadmap, index, _ = cached_planning(mechanism, grid, args.cache_dir, _Progress(sys.stderr))
+    roadmap_doc = {"mechanism": mechanism.to_dict(), "grid": grid.to_dict()}
+    return _answer(args, roadmap, index, start, goal, options, roadmap_doc)
+
+
+def _answer(args, roadmap, index, start, goal, options, roadmap_doc):
+    """The plan's JSON and exit code (1 when there is no plan)."""
     header = {"roadmap": roadmap_doc, "request": {"start": list(start), "goal": list(goal)}}
     begin = time.perf_counter()
     try:
