@@ -105,3 +105,11 @@ def test_a_fresh_process_plans_from_the_mapped_index(cached):
     reference = Planner(roadmap, index)
     for (start, goal), joints in zip(PAIRS, answer["plans"]):
         np.testing.assert_array_equal(np.array(joints), reference.plan(start, goal).joints)
+
+
+def test_an_index_on_the_graph_of_another_equals_one_built_whole(cached):
+    _, roadmap, index = cached
+    bare = PlanningIndex.build(roadmap)
+    again = PlanningIndex.build(roadmap, index.clearances, index.weights, graph_from=bare)
+    for name, array in index.arrays().items():
+        np.testing.assert_array_equal(again.arrays()[name], array, err_msg=name)

@@ -253,7 +253,8 @@ class PlannerNode(Node):
         roadmap = self._state.planner.roadmap
         try:
             index = planning_index(roadmap, (self.get_parameter("clearance").value,),
-                                   retries=self._retries)
+                                   retries=self._retries,
+                                   graph_from=self._state.planner.planning_index)
         except Exception as exc:  # plans go on without the index
             self.get_logger().error(f"the planning index failed: {exc!r}")
             return

@@ -145,7 +145,7 @@ class PlanningIndex:
         return dict(self._arrays)
 
     @classmethod
-    def build(cls, roadmap, clearances=(), weights=()):
+    def build(cls, roadmap, clearances=(), weights=(), graph_from=None):
         """Index a roadmap.
 
         Parameters
@@ -157,6 +157,9 @@ class PlanningIndex:
         weights : sequence of float
             Clearance weights (the paper's ``w``, finite, non-negative) to
             compute the node costs of; 0 needs none.
+        graph_from : PlanningIndex, optional
+            An index of the same roadmap whose node graph is taken rather
+            than built again.
 
         Returns
         -------
@@ -169,7 +172,12 @@ class PlanningIndex:
         """
         clearances = _distinct(clearances, "clearance", lambda c: 0 <= c < 1)
         weights = [w for w in _distinct(weights, "clearance weight", lambda w: w >= 0) if w > 0]
-        bare = cls(_graph_arrays(roadmap))
+        if graph_from is None:
+            bare = cls(_graph_arrays(roadmap))
+        else:
+            _check_index(roadmap, graph_from.arrays())
+            bare = cls(dict(graph_from.arrays(), **_no_tables(graph_from.n_nodes,
+                                                               graph_from.pids.size)))
         arrays = bare.arrays()
         work = work_arrays(bare.n_nodes, bare.graph.indices.size)
         arrays["clearances"] = np.array(clearances, dtype=np.float64)
@@ -257,11 +265,15 @@ def _graph_arrays(roadmap):
         "gate_node_offsets": np.concatenate(
             [[0], np.cumsum([a.size for a in lists])]).astype(np.int64),
         "gate_node_list": np.concatenate(lists + empty).astype(np.int64),
-        "quantum": np.array([quantum]), "clearances": np.zeros(0),
-        "distances": np.zeros((0, 0), dtype=np.int64), "weights": np.zeros(0),
-        "node_costs": np.zeros((0, n_nodes), dtype=np.int64),
-        "cost_floors": np.zeros((0, pids.size), dtype=np.int64),
+        "quantum": np.array([quantum]), **_no_tables(n_nodes, pids.size),
     }
+
+
+def _no_tables(n_nodes, n_patches):
+    """The gate distance and node cost arrays of an index that holds none."""
+    return {"clearances": np.zeros(0), "distances": np.zeros((0, 0), dtype=np.int64),
+            "weights": np.zeros(0), "node_costs": np.zeros((0, n_nodes), dtype=np.int64),
+            "cost_floors": np.zeros((0, n_patches), dtype=np.int64)}
 
 
 def _edges(seg, patches, offsets):

@@ -199,12 +199,14 @@ def _location_dict(location):
 
 
 def planning_index(roadmap, clearances=(DEFAULT_CLEARANCE,),
-                   clearance_weight=DEFAULT_CLEARANCE_WEIGHT, retries=Retries()):
+                   clearance_weight=DEFAULT_CLEARANCE_WEIGHT, retries=Retries(), graph_from=None):
     """The :class:`~.index.PlanningIndex` of a roadmap with the gate distances
     of ``clearances`` and the node costs of every clearance weight a
     :class:`Planner` with these ``clearance_weight`` and ``retries`` plans
-    with (seconds on the full 3-DOF roadmap)."""
-    return PlanningIndex.build(roadmap, clearances, (clearance_weight, retries.detour_weight))
+    with (seconds on the full 3-DOF roadmap); the node graph of
+    ``graph_from``, an index of the same roadmap, when given."""
+    return PlanningIndex.build(roadmap, clearances, (clearance_weight, retries.detour_weight),
+                               graph_from)
 
 
 class Planner:
