@@ -6,7 +6,8 @@ import math
 
 import numpy as np
 import pytest
-from rpr3_gwr_core import PAPER_GEOMETRY, PAPER_GRID, Planner, PlanOptions, build_roadmap
+from rpr3_gwr_core import (PAPER_GEOMETRY, PAPER_GRID, Axis, Grid, Planner, PlanOptions,
+                           build_roadmap)
 from rpr3_gwr_core.io.export import roadmap_from_json, roadmap_to_json
 from rpr3_gwr_core.exceptions import InvalidInputError
 from rpr3_gwr_core.workspace.cusps import find_cusps
@@ -105,3 +106,16 @@ def test_the_field_message_lists_only_existing_solutions(built):
     assert len(field_msg.singularity_margin) == len(field_msg.patch_ids) == total
     assert len(field_msg.poses) == 3 * total
     assert not np.isnan(np.frombuffer(field_msg.poses)).any()
+
+
+@pytest.mark.parametrize("grid", [
+    PAPER_GRID,
+    Grid(axes=(Axis(0, -math.pi, math.pi - math.pi / 60, math.pi / 60, periodic=True),
+               Axis(1, 0.0, 5.0, 0.5)), fixed=((2, 1.0),)),
+], ids=["paper", "periodic"])
+def test_a_grid_crosses_as_a_message_with_its_periodic_axes(grid):
+    from rpr3_gwr_nodes.conversions import grid_from_msg, grid_to_msg
+
+    msg = grid_to_msg(grid)
+    assert [a.periodic for a in msg.axes] == [a.periodic for a in grid.axes]
+    assert grid_from_msg(msg) == grid

@@ -78,7 +78,7 @@ def grid_to_msg(grid):
     adaptive = isinstance(grid, AdaptiveGrid)
     base = grid.base if adaptive else grid
     msg = GridMsg(axes=[GridAxis(joint=a.joint, min=a.low, max=a.high, step=a.step,
-                                 count=a.count) for a in base.axes],
+                                 count=a.count, periodic=a.periodic) for a in base.axes],
                   fixed=[FixedJoint(joint=j, value=v) for j, v in base.fixed])
     if adaptive:
         msg.refinement = grid.refinement
@@ -95,7 +95,7 @@ def grid_from_msg(msg):
         If the counts do not match the ranges and steps, or the refinement
         or its blocks do not fit the grid.
     """
-    grid = Grid(axes=tuple(Axis(a.joint, a.min, a.max, a.step) for a in msg.axes),
+    grid = Grid(axes=tuple(Axis(a.joint, a.min, a.max, a.step, a.periodic) for a in msg.axes),
                 fixed=tuple((f.joint, f.value) for f in msg.fixed))
     counts = tuple(a.count for a in msg.axes)
     if grid.shape != counts:
