@@ -31,7 +31,8 @@ import importlib
 # light modules such as the exceptions do not load numpy and the compiled
 # kernels with the package.
 _SOURCES = {
-    ".mechanisms": ("Mechanism", "ThreeRPR", "FiveBar", "DEFAULT_FIVE_BAR", "mechanism_from_dict"),
+    ".mechanisms": ("Mechanism", "ThreeRPR", "FiveBar", "DEFAULT_FIVE_BAR", "ThreeRRR",
+                    "DEFAULT_THREE_RRR", "mechanism_from_dict"),
     ".paper": ("PAPER_GEOMETRY", "PAPER_GRID", "rho1_slice"),
     ".workspace": ("Axis", "Grid", "compute_field", "build_roadmap", "Roadmap",
                    "aspect_groups"),

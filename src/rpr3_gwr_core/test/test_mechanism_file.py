@@ -10,12 +10,13 @@ import pytest
 from rpr3_gwr_core.exceptions import InvalidInputError
 from rpr3_gwr_core.io.cli import main
 from rpr3_gwr_core.io.mechanism_file import load_mechanism_file, mechanism_file_from_dict
-from rpr3_gwr_core.mechanisms import DEFAULT_FIVE_BAR
+from rpr3_gwr_core.mechanisms import DEFAULT_FIVE_BAR, DEFAULT_THREE_RRR
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID
 
 CONFIG = pathlib.Path(__file__).resolve().parents[3] / "config"
 FIVE_BAR = str(CONFIG / "five_bar.yaml")
 PAPER = str(CONFIG / "paper_3rpr.yaml")
+THREE_RRR = str(CONFIG / "three_rrr.yaml")
 # Both assembly modes of th = (3.1, 2.5) and the positive one at (-3.1, 2.5),
 # by the circle intersection (their y is the mode coordinate).
 PLUS_A, MINUS_A, PLUS_B = 0.11622901, -0.05862426, 0.10985067
@@ -33,6 +34,14 @@ def test_the_five_bar_file_is_the_default_five_bar_on_its_torus():
     assert [a.periodic for a in described.axes] == [True, True]
     assert [a.count for a in described.axes] == [120, 120]
     assert described.axes[0].low == -math.pi
+
+
+def test_the_three_rrr_file_is_the_default_three_rrr_on_its_torus():
+    described = load_mechanism_file(THREE_RRR)
+    assert described.mechanism == DEFAULT_THREE_RRR
+    assert [a.periodic for a in described.axes] == [True, True, True]
+    slice_ = described.grid({"th1": 0.0})
+    assert slice_.fixed == ((0, 0.0),) and slice_.shape == (120, 120)
 
 
 def _document(**changes):
@@ -93,6 +102,17 @@ def test_the_command_line_builds_and_plans_on_a_file(tmp_path, capsys):
     code, refused = _run(["plan", "--mechanism", FIVE_BAR, *cache, "--start", "3.1", "2.5",
                           str(PLUS_A), "--goal", "3.1", "2.5", str(MINUS_A)], capsys)
     assert code == 1 and refused["reason"] == "other_aspect"
+
+
+def test_the_command_line_plans_the_three_rrr_assembly_mode_change(tmp_path, capsys):
+    """Two modes of th = (0, 1.2043, 2.2515) with one aspect, joined through
+    the slice's two-solution region (the path itself is re-checked
+    independently in test_rrr3)."""
+    code, plan = _run(["plan", "--mechanism", THREE_RRR, "--fix", "th1=0", "--cache-dir",
+                       str(tmp_path), "--start", "0", "1.2043", "2.2515", "0.6526", "--goal",
+                       "0", "1.2043", "2.2515", "2.1165"], capsys)
+    assert code == 0 and plan["feasible"] and plan["validation"]["ok"]
+    assert plan["start"]["patch"] != plan["goal"]["patch"]
 
 
 @pytest.mark.parametrize("argv, reason", [

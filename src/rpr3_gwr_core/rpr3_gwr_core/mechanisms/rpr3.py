@@ -35,6 +35,9 @@ configurations' roots simple and polishes them; only those whose roots come
 close to merging, near the singular locus or a degenerate orientation, take
 the eigenvalues of a companion matrix in ``t = tan((alpha - alpha0) / 2)``,
 ``alpha0`` chosen per configuration so that no root sits near ``t = inf``.
+The same solver takes base points per configuration
+(:func:`solve_with_bases`), for mechanisms that reduce to a 3-RPR whose base
+points move with their joints (the 3-RRR, base points its elbows).
 """
 
 from dataclasses import dataclass
@@ -59,6 +62,7 @@ __all__ = [
     "MAX_SOLUTIONS",
     "wrap_angle",
     "serial_jacobian",
+    "solve_with_bases",
 ]
 
 MAX_SOLUTIONS = 6
@@ -745,6 +749,12 @@ def _basis_coefficients(geometry):
     Returns an array (7, 7): row j is basis function j, columns are
     ``(a0, a1, b1, a2, b2, a3, b3)`` of ``a0 + sum a_k cos k alpha + b_k sin k alpha``.
     """
+    return _fourier_basis(geometry)
+
+
+def _fourier_basis(geometry):
+    """:func:`_basis_coefficients` uncached; with per-row base points
+    (:class:`_BasePerRow` of column arrays) it is an array (n, 7, 7)."""
     n = 16
     alpha = 2 * np.pi * np.arange(n) / n
     big_a, big_b, big_c, big_d, big_e, big_f = _linear_terms(alpha, geometry)
@@ -759,12 +769,12 @@ def _basis_coefficients(geometry):
         2 * (big_a * k2 - big_b * k1),
         k1**2 + k2**2,
         delta**2,
-    ])
-    spectrum = np.fft.rfft(basis, axis=1) / n
-    coeffs = np.empty((7, 7))
-    coeffs[:, 0] = spectrum[:, 0].real
-    coeffs[:, 1::2] = 2 * spectrum[:, 1:4].real
-    coeffs[:, 2::2] = -2 * spectrum[:, 1:4].imag
+    ], axis=-2)
+    spectrum = np.fft.rfft(basis, axis=-1) / n
+    coeffs = np.empty(basis.shape[:-1] + (7,))
+    coeffs[..., 0] = spectrum[..., 0].real
+    coeffs[..., 1::2] = 2 * spectrum[..., 1:4].real
+    coeffs[..., 2::2] = -2 * spectrum[..., 1:4].imag
     return coeffs
 
 
@@ -803,6 +813,8 @@ def _equation7_coefficients(rho1, rho2, rho3, geometry):
     u = rho2**2 - rho1**2
     v = rho3**2 - rho1**2
     weights = np.stack([u * u, u * v, v * v, u, v, np.ones_like(u), -rho1**2], axis=-1)
+    if isinstance(geometry, _BasePerRow):
+        return (weights[:, None, :] @ _fourier_basis(geometry.column()))[:, 0]
     return weights @ _basis_coefficients(geometry)
 
 
@@ -848,8 +860,76 @@ def _companion_roots(coeffs, phi, values):
     return np.where(real, wrap_angle(2 * np.arctan(t.real) + alpha0[:, None]), np.nan)
 
 
+class _BasePerRow:
+    """A 3-RPR geometry whose base points differ per row of a batch: it
+    answers the attributes the batch solver reads of a :class:`ThreeRPR`
+    (``a1``..``a3`` as pairs of arrays, shape (n,)) and :meth:`take` gives
+    the rows the solver works on next."""
+
+    def __init__(self, base, platform):
+        self.a1, self.a2, self.a3 = ((base[:, i, 0], base[:, i, 1]) for i in range(3))
+        self.d1, self.d3, self.beta = platform.d1, platform.d3, platform.beta
+        self.scale = platform.scale
+        self.parameters = (*self.a1, *self.a2, *self.a3, self.d1, self.d3, self.beta)
+
+    def _map(self, function):
+        out = object.__new__(_BasePerRow)
+        out.a1, out.a2, out.a3 = (tuple(function(v) for v in a)
+                                  for a in (self.a1, self.a2, self.a3))
+        out.d1, out.d3, out.beta, out.scale = self.d1, self.d3, self.beta, self.scale
+        out.parameters = (*out.a1, *out.a2, *out.a3, out.d1, out.d3, out.beta)
+        return out
+
+    def take(self, index):
+        """The rows ``index`` (integer or boolean array)."""
+        return self._map(lambda v: v[index])
+
+    def column(self):
+        """Base coordinates shaped (n, 1), to broadcast against sampled alpha."""
+        return self._map(lambda v: v[:, None])
+
+
+def _take(geometry, index):
+    """Rows ``index`` of per-row base points; a fixed geometry is its own."""
+    return geometry.take(index) if isinstance(geometry, _BasePerRow) else geometry
+
+
+def solve_with_bases(rho, bases, platform):
+    """Direct kinematics of 3-RPRs whose base points differ per row.
+
+    The batch solver of :meth:`ThreeRPR.solve` (same sextic, root finder and
+    ordering), for mechanisms that reduce to a 3-RPR whose base points move
+    with their joints, such as the 3-RRR (base points its elbows).
+
+    Parameters
+    ----------
+    rho : ndarray, shape (n, 3)
+        Leg lengths [length unit], finite and non-negative.
+    bases : ndarray, shape (n, 3, 2)
+        Base points A1..A3 of each row [length unit], finite.
+    platform : ThreeRPR
+        Gives the platform (``d1``, ``d3``, ``beta``) and the scale; its base
+        points are not used.
+
+    Returns
+    -------
+    count : ndarray of uint8, shape (n,)
+    poses : ndarray, shape (n, 6, 3)
+        As :meth:`ThreeRPR.solve`'s.
+    """
+    rho = _as_rho(rho)
+    bases = np.asarray(bases, dtype=float)
+    if rho.ndim != 2 or bases.shape != (rho.shape[0], 3, 2):
+        raise InvalidInputError(
+            f"rho must have shape (n, 3) and bases (n, 3, 2), got {rho.shape}, {bases.shape}")
+    if not np.all(np.isfinite(bases)):
+        raise InvalidInputError("base points contain NaN or infinity")
+    return _solve(rho, _BasePerRow(bases, platform))
+
+
 def _solve(rho, geometry):
-    """:meth:`ThreeRPR.solve` of checked legs, shape (n, 3)."""
+    """:meth:`ThreeRPR.solve` of checked legs, shape (n, 3); ``geometry`` a
+    :class:`ThreeRPR` or a :class:`_BasePerRow` of n rows."""
     n = rho.shape[0]
     rho1, rho2, rho3 = rho[:, 0], rho[:, 1], rho[:, 2]
     alpha = _real_roots(_equation7_coefficients(rho1, rho2, rho3, geometry))
@@ -859,6 +939,8 @@ def _solve(rho, geometry):
         return np.zeros(n, dtype=np.uint8), poses
     a = alpha[rows, cols]
     r = rho[rows]
+    # From here on one entry per root: the base points of its row.
+    geometry = _take(geometry, rows)
     big_a, big_b, big_c, big_d, big_e, big_f = _linear_terms(a, geometry)
     g = r[:, 1] ** 2 - r[:, 0] ** 2 - big_c
     h = r[:, 2] ** 2 - r[:, 0] ** 2 - big_f
@@ -873,7 +955,8 @@ def _solve(rho, geometry):
     if not np.all(regular):
         candidate[~regular] = _degenerate_poses(
             r[~regular], a[~regular], rows[~regular], big_a[~regular], big_b[~regular],
-            big_d[~regular], big_e[~regular], g[~regular], h[~regular], geometry)
+            big_d[~regular], big_e[~regular], g[~regular], h[~regular],
+            _take(geometry, ~regular))
     # Near a degenerate orientation the linear formula loses digits, and the
     # circle construction is only a first guess: polish those poses with
     # Newton (safe there, a degenerate orientation is not a singular one), and
@@ -882,10 +965,11 @@ def _solve(rho, geometry):
     rough = np.abs(delta) < _POLISH_TOL * scale
     if np.any(rough):
         before = candidate[rough]
-        after = _newton(before, r[rough], geometry, 3)
+        rough_geometry = _take(geometry, rough)
+        after = _newton(before, r[rough], rough_geometry, 3)
 
         def fit(p):
-            return np.max(np.abs(_residuals(p, r[rough], geometry)), axis=-1)
+            return np.max(np.abs(_residuals(p, r[rough], rough_geometry)), axis=-1)
 
         moved = np.max(np.abs(after - before), axis=-1)
         keep = (fit(after) < fit(before)) & ((moved < 1e-3 * geometry.scale) | ~regular[rough])

@@ -1,0 +1,442 @@
+"""The planar 3-RRR as a :class:`Mechanism`.
+
+Conventions: base joints ``A1..A3``; the actuated angles ``(th1, th2, th3)``
+[rad] turn the proximal links of length ``l1`` to the elbows
+``C_i = A_i + l1 (cos th_i, sin th_i)``; the distal links of length ``l2``
+join the elbows to the platform points ``B_i``, placed as the 3-RPR's:
+``B1 = (x, y)``, ``B2 = B1 + d1 (cos alpha, sin alpha)``,
+``B3 = B1 + d3 (cos(alpha + beta), sin(alpha + beta))``.  The constraint
+equations are ``F_i = |B_i - C_i|**2 - l2**2 = 0``; with ``u_i = B_i - C_i``
+
+    Jx / 2 = rows (u_i, (B_i - B1) x u_i),    -Jq / 2 = diag(u_i . dC_i/dth_i).
+
+With the joints fixed the 3-RRR is a 3-RPR whose base points are the
+elbows and whose legs all have length ``l2``: its direct kinematics is the
+3-RPR's sextic, solved by the 3-RPR's batch solver with base points per
+joint vector (:func:`~.rpr3.solve_with_bases`), so at most six solutions.
+
+Parallel singularities are ``det Jx = 0``; the margin normalises ``Jx`` as
+the 3-RPR's does.  A serial singularity (a leg stretched or folded, ``u_i``
+parallel to ``dC_i/dth_i``) is no obstacle to moving in joint space and is
+not treated as one.  As the five-bar's, the pose alone does not fix the
+elbows, so :meth:`ThreeRRR.margin` needs the joints.
+"""
+
+from dataclasses import dataclass
+import functools
+import math
+
+import numba
+from numba import types
+from numba.core.types.function_type import CompileResultWAP
+from numba.extending import register_jitable
+import numpy as np
+
+from ..exceptions import InvalidInputError
+from .base import STEP_KERNEL_SIGNATURE, Mechanism, register_mechanism
+from .five_bar import _length
+from .rpr3 import (
+    MAX_SOLUTIONS,
+    ThreeRPR,
+    _adjugate_product,
+    _leg_residuals,
+    _normalised_det,
+    _row_norms,
+    _row_terms,
+    _rows_margin,
+    beta_from_sides,
+    solve_with_bases,
+)
+
+__all__ = ["ThreeRRR", "DEFAULT_THREE_RRR"]
+
+# The scalar continuation step, as the 3-RPR's and the five-bar's: converged
+# when every residual is below _RESIDUAL_TOL * scale**2 after at most
+# _NEWTON_STEPS corrector steps, refused when the corrector moved the pose
+# more than _JUMP_RATIO times the predictor's move plus _JUMP_FLOOR * scale
+# (the predictor is first order, so a longer correction landed elsewhere).
+_NEWTON_STEPS = 6
+_RESIDUAL_TOL = 1e-9
+_JUMP_RATIO = 0.5
+_JUMP_FLOOR = 1e-7
+# Newton steps that polish the direct kinematics' poses, and how far [scale]
+# a polished pose may move (far beyond the roots' error, far below the gap
+# between two regular solutions).
+_POLISH_STEPS = 2
+_POLISH_REACH = 1e-4
+
+
+def _as_triples(values, what):
+    """Finite float array of shape (..., 3), else ``InvalidInputError``."""
+    try:
+        values = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{what} must be numbers, got {values!r}") from None
+    if values.shape[-1:] != (3,):
+        raise InvalidInputError(f"{what} have 3 components, got shape {values.shape}")
+    if not np.all(np.isfinite(values)):
+        raise InvalidInputError(f"{what} contain NaN or infinity")
+    return values
+
+
+@register_mechanism("3-RRR")
+@dataclass(frozen=True)
+class ThreeRRR(Mechanism):
+    """The planar 3-RRR parallel manipulator.
+
+    Joints are the actuated base angles ``(th1, th2, th3)`` [rad]; poses are
+    ``(x, y, alpha)`` [length unit, length unit, rad] as the 3-RPR's, and
+    ``alpha`` chooses the assembly mode of a request.  Batches follow
+    :class:`~rpr3_gwr_core.mechanisms.base.Mechanism`: joints and poses
+    ``(..., 3)``; :meth:`solve` takes joints ``(n, 3)`` and gives counts
+    ``(n,)`` (uint8) and poses ``(n, 6, 3)`` sorted by alpha in (-pi, pi],
+    NaN beyond the count.
+
+    Attributes
+    ----------
+    a1, a2, a3 : tuple of float, shape (2,)
+        Base joints A1..A3 [length unit].
+    d1 : float
+        Platform side B1B2 [length unit].
+    d3 : float
+        Platform side B1B3 [length unit].
+    beta : float
+        Angle at B1 from B1B2 to B1B3 [rad].
+    l1 : float
+        Proximal links A_i C_i [length unit].
+    l2 : float
+        Distal links C_i B_i [length unit].
+
+    Raises
+    ------
+    InvalidInputError
+        If a base point or platform value is not finite (or the platform is
+        flat), or a link length is not a finite positive number.
+    """
+
+    a1: tuple = (0.0, 0.0)
+    a2: tuple = (15.91, 0.0)
+    a3: tuple = (0.0, 10.0)
+    d1: float = 17.04
+    d3: float = 20.84
+    beta: float = beta_from_sides(17.04, 16.54, 20.84)
+    l1: float = 8.0
+    l2: float = 12.0
+
+    joint_names = ("th1", "th2", "th3")
+    pose_names = ("x", "y", "alpha")
+    angular = (False, False, True)
+    mode_coordinate = 2
+    max_solutions = MAX_SOLUTIONS
+
+    def __post_init__(self):
+        # The 3-RPR of the same base points and platform checks and converts
+        # them, so that both mechanisms accept and refuse the same values.
+        platform = ThreeRPR(a1=self.a1, a2=self.a2, a3=self.a3, d1=self.d1, d3=self.d3,
+                            beta=self.beta)
+        for name in ("a1", "a2", "a3", "d1", "d3", "beta"):
+            object.__setattr__(self, name, getattr(platform, name))
+        for name in ("l1", "l2"):
+            object.__setattr__(self, name, _length(getattr(self, name), name))
+
+    @functools.cached_property
+    def platform(self):
+        """The 3-RPR of the same base points and platform: with the joints
+        fixed the 3-RRR is it with the elbows as base points."""
+        return ThreeRPR(a1=self.a1, a2=self.a2, a3=self.a3, d1=self.d1, d3=self.d3,
+                        beta=self.beta)
+
+    @functools.cached_property
+    def scale(self):
+        """Longest platform side [length unit], as the 3-RPR's: it makes the
+        orientation column of ``Jx`` commensurable with positions."""
+        return self.platform.scale
+
+    @functools.cached_property
+    def parameters(self):
+        """``(a1x, a1y, a2x, a2y, a3x, a3y, d1, d3, beta, l1, l2)``: the geometry
+        as the constraint equations (and their compiled form) take it."""
+        return (*self.a1, *self.a2, *self.a3, self.d1, self.d3, self.beta, self.l1, self.l2)
+
+    def to_dict(self):
+        """Plain-data form, for JSON, messages and cache keys."""
+        return {"kind": self.kind, "a1": list(self.a1), "a2": list(self.a2),
+                "a3": list(self.a3), "d1": self.d1, "d3": self.d3, "beta": self.beta,
+                "l1": self.l1, "l2": self.l2}
+
+    @classmethod
+    def from_dict(cls, data):
+        """Inverse of :meth:`to_dict`."""
+        try:
+            return cls(a1=tuple(data["a1"]), a2=tuple(data["a2"]), a3=tuple(data["a3"]),
+                       d1=data["d1"], d3=data["d3"], beta=data["beta"], l1=data["l1"],
+                       l2=data["l2"])
+        except (KeyError, TypeError) as exc:
+            raise InvalidInputError(f"malformed 3-RRR: {exc}") from exc
+
+    def elbows(self, joints):
+        """Elbows ``C_i = A_i + l1 (cos th_i, sin th_i)`` of joints ``(..., 3)``.
+
+        Returns
+        -------
+        ndarray, shape (..., 3, 2)
+            [length unit].
+        """
+        joints = _as_triples(joints, "joints")
+        c1x, c1y, c2x, c2y, c3x, c3y, *_ = _elbow_parameters(
+            self.parameters, joints[..., 0], joints[..., 1], joints[..., 2])
+        return np.stack([np.stack([c1x, c1y], -1), np.stack([c2x, c2y], -1),
+                         np.stack([c3x, c3y], -1)], -2)
+
+    # The Mechanism interface, served by the functions below.
+
+    def check_joints(self, joints):
+        """Refuse joints that are not finite numbers of shape (..., 3).
+
+        Raises
+        ------
+        InvalidInputError
+        """
+        _as_triples(joints, "joints")
+
+    def solve(self, joints):
+        """All real direct-kinematic solutions of many joint vectors.
+
+        Parameters
+        ----------
+        joints : array_like, shape (n, 3)
+            ``(th1, th2, th3)`` [rad], finite.
+
+        Returns
+        -------
+        count : ndarray of uint8, shape (n,)
+        poses : ndarray, shape (n, 6, 3)
+            ``(x, y, alpha)`` [length unit, length unit, rad], sorted by alpha
+            in (-pi, pi], NaN beyond ``count``.
+        """
+        joints = _as_triples(joints, "joints")
+        if joints.ndim != 2:
+            raise InvalidInputError(f"joints must have shape (n, 3), got {joints.shape}")
+        legs = np.full(joints.shape, self.l2)
+        count, poses = solve_with_bases(legs, self.elbows(joints), self.platform)
+        # Where two roots of the sextic are close the root finder leaves
+        # their poses off the legs by up to about 1e-5 [length unit**2], even
+        # when both are regular (two assembly modes at nearly one alpha); the
+        # 3-RRR, whose base points move with its joints, meets such joints
+        # far more often than the 3-RPR.  Newton on the pose equations
+        # restores full precision; a polished pose is kept only if it fits
+        # better and stayed close, so that Newton never trades one solution
+        # for another.
+        found = np.isfinite(poses[..., 0])
+        before, at = poses[found], np.broadcast_to(joints[:, None, :], poses.shape)[found]
+        after = self.correct(before, at, _POLISH_STEPS)
+        misfit_before = np.max(np.abs(self.residual(before, at)), axis=-1)
+        misfit_after = np.max(np.abs(self.residual(after, at)), axis=-1)
+        moved = np.max(np.abs(after - before), axis=-1)
+        keep = (misfit_after < misfit_before) & (moved < _POLISH_REACH * self.scale)
+        after[:, 2] = np.pi - np.remainder(np.pi - after[:, 2], 2 * np.pi)
+        before[keep] = after[keep]
+        poses[found] = before
+        return count, poses
+
+    def margin(self, poses, joints=None):
+        """Signed, normalised distance from a parallel singularity.
+
+        Each row ``(u_i, (B_i - B1) x u_i / scale)`` of ``Jx / 2`` (the
+        orientation column over :attr:`scale`) is divided by its norm before
+        the determinant (Hadamard's bound), as the 3-RPR's margin.
+
+        Parameters
+        ----------
+        poses : array_like, shape (..., 3)
+        joints : array_like, shape (..., 3)
+            The joints of the poses (broadcast against them).  Required: the
+            pose alone does not fix the elbows.
+
+        Returns
+        -------
+        ndarray, shape (...)
+            In [-1, 1], 0 on a singularity (and where a distal link has zero
+            length), its sign the aspect; a NumPy scalar for one pose.
+
+        Raises
+        ------
+        TypeError
+            Without ``joints``.
+        """
+        if joints is None:
+            raise TypeError(
+                "the 3-RRR's margin needs the joints as well as the poses: a pose does not "
+                "fix the elbows C_i (each may sit on either side of the line from its base "
+                "to its platform point), so the sign of det Jx is not a function of the "
+                "pose; call margin(poses, joints)")
+        rows = _batch_rows(poses, joints, self.parameters)
+        norms = _row_norms(rows, self.scale)
+        ok = (norms[0] > 0) & (norms[1] > 0) & (norms[2] > 0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            margin = _normalised_det(rows, norms, self.scale)
+        return np.where(ok, margin, 0.0)[()]
+
+    def aspect(self, poses, joints=None):
+        """``sign(margin)``: +1 or -1, 0 exactly on a singularity, int8, shape (...)."""
+        return np.sign(self.margin(poses, joints)).astype(np.int8)
+
+    def predict(self, poses, joints_from, joints_to):
+        """Euler step ``Jx dx = -Jq dq`` of poses ``(..., 3)`` for a change of
+        joints, the change taken the short way round each joint's turn."""
+        poses = np.asarray(poses, dtype=float)
+        joints_from = np.asarray(joints_from, dtype=float)
+        change = _turn_difference(np.asarray(joints_to, dtype=float) - joints_from)
+        rows = _batch_rows(poses, joints_from, self.parameters)
+        rates = _joint_rates(rows, self.l1, joints_from[..., 0], joints_from[..., 1],
+                             joints_from[..., 2])
+        return poses + _solve_rows(rows, *(rate * change[..., i] for i, rate in enumerate(rates)))
+
+    def correct(self, poses, joints, iterations):
+        """Newton steps on the constraint equations at fixed joints.
+
+        Parameters
+        ----------
+        poses : ndarray, shape (..., 3)
+            Initial guesses; not modified.
+        joints : ndarray, shape (..., 3)
+        iterations : int
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            Corrected poses (alpha is not wrapped).
+        """
+        poses = np.asarray(poses, dtype=float)
+        l2 = self.l2
+        for _ in range(iterations):
+            rows = _batch_rows(poses, joints, self.parameters)
+            poses = poses - 0.5 * _solve_rows(rows, *_leg_residuals(rows, (l2, l2, l2)))
+        return poses
+
+    def residual(self, poses, joints):
+        """Constraint residuals ``F_i = |B_i - C_i|**2 - l2**2``.
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            One per leg [length unit**2].
+        """
+        rows = _batch_rows(poses, joints, self.parameters)
+        l2 = self.l2
+        return np.stack(np.broadcast_arrays(*_leg_residuals(rows, (l2, l2, l2))), axis=-1)
+
+    def step(self, pose, joints_from, joints_to):
+        x, y, alpha = (float(v) for v in pose)
+        ok, x, y, alpha, margin = _compiled_step(
+            self.parameters, self.scale, x, y, alpha, *(float(v) for v in joints_from),
+            *(float(v) for v in joints_to))
+        return ((x, y, alpha), margin) if ok else None
+
+    @functools.cached_property
+    def step_kernel(self):
+        # Its address taken once: passing the dispatcher itself would look it
+        # up, under numba's compiler lock, at every call.
+        compiled = CompileResultWAP(_step_kernel.overloads[STEP_KERNEL_SIGNATURE.args])
+        # Typed once: numba would otherwise infer its type at every call.
+        compiled._numba_type_ = types.FunctionType(STEP_KERNEL_SIGNATURE)
+        return compiled, np.array([*self.parameters, self.scale])
+
+
+# The issue's 3-RRR: the paper's base points and platform, l1 = 8 and l2 = 12
+# on every leg.  Every joint vector of its slice th1 = 0 is assembled, with
+# 2, 4 or 6 solutions.
+DEFAULT_THREE_RRR = ThreeRRR()
+
+
+# The constraint equations are the 3-RPR's with the elbows as base points:
+# the 3-RPR's row arithmetic serves numpy batches and, compiled by numba,
+# the floats of the sequential continuation.
+
+@register_jitable
+def _elbow_parameters(parameters, t1, t2, t3):
+    """The 3-RPR parameters whose base points are the elbows of ``(t1, t2, t3)``."""
+    a1x, a1y, a2x, a2y, a3x, a3y, d1, d3, beta, l1, _ = parameters
+    return (a1x + l1 * np.cos(t1), a1y + l1 * np.sin(t1), a2x + l1 * np.cos(t2),
+            a2y + l1 * np.sin(t2), a3x + l1 * np.cos(t3), a3y + l1 * np.sin(t3), d1, d3, beta)
+
+
+@register_jitable
+def _joint_rates(rows, l1, t1, t2, t3):
+    """``u_i . dC_i/dth_i``, the diagonal of ``-Jq / 2``."""
+    u1x, u1y, u2x, u2y, _, u3x, u3y, _ = rows
+    return (l1 * (np.cos(t1) * u1y - np.sin(t1) * u1x),
+            l1 * (np.cos(t2) * u2y - np.sin(t2) * u2x),
+            l1 * (np.cos(t3) * u3y - np.sin(t3) * u3x))
+
+
+@register_jitable
+def _turn_difference(change):
+    """Joint changes taken the short way round: in [-pi, pi]."""
+    return change - 2 * np.pi * np.floor(change / (2 * np.pi) + 0.5)
+
+
+def _batch_rows(poses, joints, parameters):
+    poses, joints = np.asarray(poses, dtype=float), np.asarray(joints, dtype=float)
+    return _row_terms(poses[..., 0], poses[..., 1], poses[..., 2],
+                      _elbow_parameters(parameters, joints[..., 0], joints[..., 1],
+                                        joints[..., 2]))
+
+
+def _solve_rows(rows, r1, r2, r3):
+    """``(Jx / 2)^-1 r`` by the adjugate of the rows; a singular system gives 0."""
+    (dx, dy, da), det = _adjugate_product(rows, r1, r2, r3)
+    inv = np.where(det != 0, 1.0 / np.where(det != 0, det, 1.0), 0.0)
+    return np.stack(np.broadcast_arrays(dx * inv, dy * inv, da * inv), axis=-1)
+
+
+@numba.njit(cache=True)
+def _compiled_step(parameters, scale, x, y, alpha, a1, a2, a3, b1, b2, b3):
+    """One predictor-corrector step from joints ``(a1, a2, a3)`` to
+    ``(b1, b2, b3)``: ``(converged, x, y, alpha, margin)``."""
+    l1, l2 = parameters[9], parameters[10]
+    rows = _row_terms(x, y, alpha, _elbow_parameters(parameters, a1, a2, a3))
+    v1, v2, v3 = _joint_rates(rows, l1, a1, a2, a3)
+    q1, q2, q3 = _turn_difference(b1 - a1), _turn_difference(b2 - a2), _turn_difference(b3 - a3)
+    (dx, dy, da), det = _adjugate_product(rows, v1 * q1, v2 * q2, v3 * q3)
+    if det == 0.0:
+        return False, x, y, alpha, 0.0
+    px, py, palpha = x + dx / det, y + dy / det, alpha + da / det
+    # The corrector's move is measured against the predictor's, or against
+    # the elbows' move if that is longer: where a leg is stretched or folded
+    # (a serial singularity, no obstacle) its joint moves the platform only
+    # to second order, and the predictor's move alone would refuse every
+    # step across it.
+    predicted = max(math.sqrt((dx / det) ** 2 + (dy / det) ** 2 + (da / det * scale) ** 2),
+                    l1 * max(abs(q1), abs(q2), abs(q3)))
+    x, y, alpha = px, py, palpha
+    target = _elbow_parameters(parameters, b1, b2, b3)
+    tol = _RESIDUAL_TOL * scale * scale
+    for _ in range(_NEWTON_STEPS):
+        rows = _row_terms(x, y, alpha, target)
+        e1, e2, e3 = _leg_residuals(rows, (l2, l2, l2))
+        if max(abs(e1), abs(e2), abs(e3)) < tol:
+            corrected = math.sqrt((x - px) ** 2 + (y - py) ** 2 + ((alpha - palpha) * scale) ** 2)
+            if corrected > _JUMP_RATIO * predicted + _JUMP_FLOOR * scale:
+                return False, x, y, alpha, 0.0
+            return True, x, y, alpha, _rows_margin(rows, scale)
+        (dx, dy, da), det = _adjugate_product(rows, e1, e2, e3)
+        if det == 0.0:
+            return False, x, y, alpha, 0.0
+        x, y, alpha = x - 0.5 * dx / det, y - 0.5 * dy / det, alpha - 0.5 * da / det
+    return False, x, y, alpha, 0.0
+
+
+@numba.njit(STEP_KERNEL_SIGNATURE, cache=True)
+def _step_kernel(parameters, pose, joints_from, joints_to):
+    """:func:`_compiled_step` as :data:`~.base.STEP_KERNEL_SIGNATURE` takes
+    it; ``parameters`` are :attr:`ThreeRRR.parameters`, then the scale."""
+    p = parameters
+    ok, x, y, alpha, margin = _compiled_step(
+        (p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10]), p[11],
+        pose[0], pose[1], pose[2], joints_from[0], joints_from[1], joints_from[2],
+        joints_to[0], joints_to[1], joints_to[2])
+    if not ok:
+        return np.nan
+    pose[0], pose[1], pose[2] = x, y, alpha
+    return margin
