@@ -17,13 +17,15 @@ runs outside the interpreter.
 
 import abc
 import math
+import numbers
 
 import numpy as np
 
 from ..exceptions import InvalidInputError
 from .continuation import STEP_KERNEL_SIGNATURE
 
-__all__ = ["Mechanism", "mechanism_from_dict", "register_mechanism", "STEP_KERNEL_SIGNATURE"]
+__all__ = ["Mechanism", "mechanism_from_dict", "register_mechanism", "STEP_KERNEL_SIGNATURE",
+           "positive_length", "finite_vectors"]
 
 _REGISTRY = {}
 
@@ -49,6 +51,31 @@ def mechanism_from_dict(data):
     if kind not in _REGISTRY:
         raise InvalidInputError(f"unknown mechanism kind {kind!r}; known: {sorted(_REGISTRY)}")
     return _REGISTRY[kind].from_dict(data)
+
+
+def positive_length(value, name):
+    """``float(value)`` for finite positive real numbers only (no strings),
+    else ``InvalidInputError``: a mechanism's lengths."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise InvalidInputError(f"{name} must be a number, got {value!r}")
+    value = float(value)
+    if not (math.isfinite(value) and value > 0):
+        raise InvalidInputError(f"{name} must be finite and positive, got {value}")
+    return value
+
+
+def finite_vectors(values, what, size):
+    """Finite float array of shape (..., size), else ``InvalidInputError``:
+    a batch of joints or poses."""
+    try:
+        values = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{what} must be numbers, got {values!r}") from None
+    if values.shape[-1:] != (size,):
+        raise InvalidInputError(f"{what} have {size} components, got shape {values.shape}")
+    if not np.all(np.isfinite(values)):
+        raise InvalidInputError(f"{what} contain NaN or infinity")
+    return values
 
 
 class Mechanism(abc.ABC):

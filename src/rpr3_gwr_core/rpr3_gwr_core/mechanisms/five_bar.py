@@ -28,7 +28,6 @@ Its margin therefore needs the joints as well as the pose
 from dataclasses import dataclass
 import functools
 import math
-import numbers
 
 import numba
 from numba import types
@@ -37,7 +36,8 @@ from numba.extending import register_jitable
 import numpy as np
 
 from ..exceptions import InvalidInputError, SingularityError
-from .base import STEP_KERNEL_SIGNATURE, Mechanism, register_mechanism
+from .base import (STEP_KERNEL_SIGNATURE, Mechanism, finite_vectors, positive_length,
+                   register_mechanism)
 
 __all__ = ["FiveBar", "DEFAULT_FIVE_BAR", "COINCIDENT_ELBOWS"]
 
@@ -60,29 +60,6 @@ _NEWTON_STEPS = 6
 _RESIDUAL_TOL = 1e-9
 _JUMP_RATIO = 0.5
 _JUMP_FLOOR = 1e-7
-
-
-def _length(value, name):
-    """``float(value)`` for finite positive real numbers only (no strings)."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise InvalidInputError(f"{name} must be a number, got {value!r}")
-    value = float(value)
-    if not (math.isfinite(value) and value > 0):
-        raise InvalidInputError(f"{name} must be finite and positive, got {value}")
-    return value
-
-
-def _as_pairs(values, what):
-    """Finite float array of shape (..., 2), else ``InvalidInputError``."""
-    try:
-        values = np.asarray(values, dtype=float)
-    except (TypeError, ValueError):
-        raise InvalidInputError(f"{what} must be numbers, got {values!r}") from None
-    if values.shape[-1:] != (2,):
-        raise InvalidInputError(f"{what} have 2 components, got shape {values.shape}")
-    if not np.all(np.isfinite(values)):
-        raise InvalidInputError(f"{what} contain NaN or infinity")
-    return values
 
 
 @register_mechanism("5R")
@@ -126,7 +103,7 @@ class FiveBar(Mechanism):
 
     def __post_init__(self):
         for name in ("d", "l1", "l2"):
-            object.__setattr__(self, name, _length(getattr(self, name), name))
+            object.__setattr__(self, name, positive_length(getattr(self, name), name))
 
     @property
     def scale(self):
@@ -153,7 +130,7 @@ class FiveBar(Mechanism):
 
     def elbow_distance(self, joints):
         """``|C2 - C1|`` of joints ``(..., 2)`` [m], shape (...)."""
-        joints = _as_pairs(joints, "joints")
+        joints = finite_vectors(joints, "joints", 2)
         return np.hypot(*_elbow_gap(joints[..., 0], joints[..., 1], self.parameters))
 
     # The Mechanism interface, served by the functions below.
@@ -172,7 +149,7 @@ class FiveBar(Mechanism):
         SingularityError
             If the elbows coincide (closer than ``COINCIDENT_ELBOWS * scale``).
         """
-        joints = _as_pairs(joints, "joints")
+        joints = finite_vectors(joints, "joints", 2)
         dist = self.elbow_distance(joints)
         if np.any(dist < COINCIDENT_ELBOWS * self.scale):
             k = int(np.argmin(dist.ravel()))
@@ -183,7 +160,7 @@ class FiveBar(Mechanism):
                 f"singular poses, of radius l2 = {self.l2:g} m around them")
 
     def solve(self, joints):
-        joints = _as_pairs(joints, "joints")
+        joints = finite_vectors(joints, "joints", 2)
         if joints.ndim != 2:
             raise InvalidInputError(f"joints must have shape (n, 2), got {joints.shape}")
         return _solve(joints, self)

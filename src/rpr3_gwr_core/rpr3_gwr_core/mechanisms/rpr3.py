@@ -618,11 +618,19 @@ def _compiled_step(parameters, scale, x, y, alpha, r1, r2, r3, t1, t2, t3):
         return False, x, y, alpha, 0.0
     px, py, palpha = x + dx / det, y + dy / det, alpha + da / det
     predicted = math.sqrt((dx / det) ** 2 + (dy / det) ** 2 + (da / det * scale) ** 2)
+    return _corrected(parameters, (t1, t2, t3), scale, px, py, palpha, predicted)
+
+
+@register_jitable
+def _corrected(parameters, legs, scale, px, py, palpha, predicted):
+    """Newton from the predicted pose ``(px, py, palpha)`` onto the legs of a
+    3-RPR of base and platform ``parameters``, judged against the
+    predictor's move ``predicted``: ``(converged, x, y, alpha, margin)``."""
     x, y, alpha = px, py, palpha
     tol = _RESIDUAL_TOL * scale * scale
     for _ in range(_NEWTON_STEPS):
         rows = _row_terms(x, y, alpha, parameters)
-        e1, e2, e3 = _leg_residuals(rows, (t1, t2, t3))
+        e1, e2, e3 = _leg_residuals(rows, legs)
         if max(abs(e1), abs(e2), abs(e3)) < tol:
             corrected = math.sqrt((x - px) ** 2 + (y - py) ** 2 + ((alpha - palpha) * scale) ** 2)
             # The predictor is first order, so on the followed branch the

@@ -33,50 +33,28 @@ from numba.extending import register_jitable
 import numpy as np
 
 from ..exceptions import InvalidInputError
-from .base import STEP_KERNEL_SIGNATURE, Mechanism, register_mechanism
-from .five_bar import _length
+from .base import (STEP_KERNEL_SIGNATURE, Mechanism, finite_vectors, positive_length,
+                   register_mechanism)
 from .rpr3 import (
     MAX_SOLUTIONS,
     ThreeRPR,
     _adjugate_product,
+    _corrected,
     _leg_residuals,
     _normalised_det,
     _row_norms,
     _row_terms,
-    _rows_margin,
     beta_from_sides,
     solve_with_bases,
 )
 
 __all__ = ["ThreeRRR", "DEFAULT_THREE_RRR"]
 
-# The scalar continuation step, as the 3-RPR's and the five-bar's: converged
-# when every residual is below _RESIDUAL_TOL * scale**2 after at most
-# _NEWTON_STEPS corrector steps, refused when the corrector moved the pose
-# more than _JUMP_RATIO times the predictor's move plus _JUMP_FLOOR * scale
-# (the predictor is first order, so a longer correction landed elsewhere).
-_NEWTON_STEPS = 6
-_RESIDUAL_TOL = 1e-9
-_JUMP_RATIO = 0.5
-_JUMP_FLOOR = 1e-7
 # Newton steps that polish the direct kinematics' poses, and how far [scale]
 # a polished pose may move (far beyond the roots' error, far below the gap
 # between two regular solutions).
 _POLISH_STEPS = 2
 _POLISH_REACH = 1e-4
-
-
-def _as_triples(values, what):
-    """Finite float array of shape (..., 3), else ``InvalidInputError``."""
-    try:
-        values = np.asarray(values, dtype=float)
-    except (TypeError, ValueError):
-        raise InvalidInputError(f"{what} must be numbers, got {values!r}") from None
-    if values.shape[-1:] != (3,):
-        raise InvalidInputError(f"{what} have 3 components, got shape {values.shape}")
-    if not np.all(np.isfinite(values)):
-        raise InvalidInputError(f"{what} contain NaN or infinity")
-    return values
 
 
 @register_mechanism("3-RRR")
@@ -137,7 +115,7 @@ class ThreeRRR(Mechanism):
         for name in ("a1", "a2", "a3", "d1", "d3", "beta"):
             object.__setattr__(self, name, getattr(platform, name))
         for name in ("l1", "l2"):
-            object.__setattr__(self, name, _length(getattr(self, name), name))
+            object.__setattr__(self, name, positive_length(getattr(self, name), name))
 
     @functools.cached_property
     def platform(self):
@@ -182,7 +160,7 @@ class ThreeRRR(Mechanism):
         ndarray, shape (..., 3, 2)
             [length unit].
         """
-        joints = _as_triples(joints, "joints")
+        joints = finite_vectors(joints, "joints", 3)
         c1x, c1y, c2x, c2y, c3x, c3y, *_ = _elbow_parameters(
             self.parameters, joints[..., 0], joints[..., 1], joints[..., 2])
         return np.stack([np.stack([c1x, c1y], -1), np.stack([c2x, c2y], -1),
@@ -197,7 +175,7 @@ class ThreeRRR(Mechanism):
         ------
         InvalidInputError
         """
-        _as_triples(joints, "joints")
+        finite_vectors(joints, "joints", 3)
 
     def solve(self, joints):
         """All real direct-kinematic solutions of many joint vectors.
@@ -214,7 +192,7 @@ class ThreeRRR(Mechanism):
             ``(x, y, alpha)`` [length unit, length unit, rad], sorted by alpha
             in (-pi, pi], NaN beyond ``count``.
         """
-        joints = _as_triples(joints, "joints")
+        joints = finite_vectors(joints, "joints", 3)
         if joints.ndim != 2:
             raise InvalidInputError(f"joints must have shape (n, 3), got {joints.shape}")
         legs = np.full(joints.shape, self.l2)
@@ -409,22 +387,8 @@ def _compiled_step(parameters, scale, x, y, alpha, a1, a2, a3, b1, b2, b3):
     # step across it.
     predicted = max(math.sqrt((dx / det) ** 2 + (dy / det) ** 2 + (da / det * scale) ** 2),
                     l1 * max(abs(q1), abs(q2), abs(q3)))
-    x, y, alpha = px, py, palpha
-    target = _elbow_parameters(parameters, b1, b2, b3)
-    tol = _RESIDUAL_TOL * scale * scale
-    for _ in range(_NEWTON_STEPS):
-        rows = _row_terms(x, y, alpha, target)
-        e1, e2, e3 = _leg_residuals(rows, (l2, l2, l2))
-        if max(abs(e1), abs(e2), abs(e3)) < tol:
-            corrected = math.sqrt((x - px) ** 2 + (y - py) ** 2 + ((alpha - palpha) * scale) ** 2)
-            if corrected > _JUMP_RATIO * predicted + _JUMP_FLOOR * scale:
-                return False, x, y, alpha, 0.0
-            return True, x, y, alpha, _rows_margin(rows, scale)
-        (dx, dy, da), det = _adjugate_product(rows, e1, e2, e3)
-        if det == 0.0:
-            return False, x, y, alpha, 0.0
-        x, y, alpha = x - 0.5 * dx / det, y - 0.5 * dy / det, alpha - 0.5 * da / det
-    return False, x, y, alpha, 0.0
+    return _corrected(_elbow_parameters(parameters, b1, b2, b3), (l2, l2, l2), scale, px, py,
+                      palpha, predicted)
 
 
 @numba.njit(STEP_KERNEL_SIGNATURE, cache=True)
