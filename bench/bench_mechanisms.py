@@ -6,7 +6,8 @@ Run on demand, after ``source ros2_ws/env.sh``:
 
 For each mechanism file in ``config/`` (a slice of ``--cells`` x ``--cells``
 cells: the paper's 3-RPR at rho1 = 17, the five-bar over its whole torus,
-the 3-RRR at th1 = 0, over its torus), the median build time of the roadmap
+the 3-RRR at th1 = 0, over its torus, the 3-PRR at s1 = 5), the median
+build time of the roadmap
 over ``--repeat`` builds, as a fraction of the eigenvalue baseline of
 ``bench_roadmap.py`` measured in the same run (the issue's target: 0.25),
 and plans between random same-aspect pairs of cell solutions with margin at
@@ -35,7 +36,7 @@ from bench_roadmap import eigenvalue_baseline  # noqa: E402
 CONFIG = pathlib.Path(__file__).resolve().parents[1] / "config"
 # The file and the joint it fixes for the slice.
 SLICES = {"paper_3rpr.yaml": {"rho1": 17.0}, "five_bar.yaml": {},
-          "three_rrr.yaml": {"th1": 0.0}}
+          "three_rrr.yaml": {"th1": 0.0}, "three_prr.yaml": {"s1": 5.0}}
 
 
 def _resampled(grid, cells):

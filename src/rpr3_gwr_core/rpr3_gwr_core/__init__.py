@@ -32,7 +32,8 @@ import importlib
 # kernels with the package.
 _SOURCES = {
     ".mechanisms": ("Mechanism", "ThreeRPR", "FiveBar", "DEFAULT_FIVE_BAR", "ThreeRRR",
-                    "DEFAULT_THREE_RRR", "mechanism_from_dict"),
+                    "DEFAULT_THREE_RRR", "ThreePRR", "DEFAULT_THREE_PRR",
+                    "mechanism_from_dict"),
     ".paper": ("PAPER_GEOMETRY", "PAPER_GRID", "rho1_slice"),
     ".workspace": ("Axis", "Grid", "compute_field", "build_roadmap", "Roadmap",
                    "aspect_groups"),

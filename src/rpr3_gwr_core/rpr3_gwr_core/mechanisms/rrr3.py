@@ -14,6 +14,8 @@ With the joints fixed the 3-RRR is a 3-RPR whose base points are the
 elbows and whose legs all have length ``l2``: its direct kinematics is the
 3-RPR's sextic, solved by the 3-RPR's batch solver with base points per
 joint vector (:func:`~.rpr3.solve_with_bases`), so at most six solutions.
+That reduction (:class:`_MovingBaseRPR`) is shared with the 3-PRR
+(:mod:`.prr3`), whose base points are its slider joints.
 
 Parallel singularities are ``det Jx = 0``; the margin normalises ``Jx`` as
 the 3-RPR's does.  A serial singularity (a leg stretched or folded, ``u_i``
@@ -57,70 +59,38 @@ _POLISH_STEPS = 2
 _POLISH_REACH = 1e-4
 
 
-@register_mechanism("3-RRR")
-@dataclass(frozen=True)
-class ThreeRRR(Mechanism):
-    """The planar 3-RRR parallel manipulator.
+class _MovingBaseRPR(Mechanism):
+    """A 3-RPR whose base points move with the joints and whose legs all have
+    one length: with its joints fixed, the 3-RRR (base points its elbows)
+    and the 3-PRR (base points its slider joints) are such 3-RPRs.
 
-    Joints are the actuated base angles ``(th1, th2, th3)`` [rad]; poses are
-    ``(x, y, alpha)`` [length unit, length unit, rad] as the 3-RPR's, and
-    ``alpha`` chooses the assembly mode of a request.  Batches follow
-    :class:`~rpr3_gwr_core.mechanisms.base.Mechanism`: joints and poses
-    ``(..., 3)``; :meth:`solve` takes joints ``(n, 3)`` and gives counts
-    ``(n,)`` (uint8) and poses ``(n, 6, 3)`` sorted by alpha in (-pi, pi],
-    NaN beyond the count.
+    The direct kinematics, margin, predictor, corrector and residuals are the
+    3-RPR's with the moving base points ``C_i``; a subclass gives them by
 
-    Attributes
-    ----------
-    a1, a2, a3 : tuple of float, shape (2,)
-        Base joints A1..A3 [length unit].
-    d1 : float
-        Platform side B1B2 [length unit].
-    d3 : float
-        Platform side B1B3 [length unit].
-    beta : float
-        Angle at B1 from B1B2 to B1B3 [rad].
-    l1 : float
-        Proximal links A_i C_i [length unit].
-    l2 : float
-        Distal links C_i B_i [length unit].
+    * ``_base_parameters(parameters, q1, q2, q3)``: the 3-RPR parameters
+      ``(c1x, c1y, c2x, c2y, c3x, c3y, d1, d3, beta)`` of its joints (a
+      ``register_jitable`` function, as a staticmethod);
+    * ``_rates(rows, joints)``: ``u_i . dC_i/dq_i``, the diagonal of ``-Jq / 2``;
+    * ``_change(joints_from, joints_to)``: the joints' change;
+    * ``distal``: the legs' length; ``parameters``: its geometry as a tuple;
+    * ``_compiled_step`` and ``_step_kernel``: its step compiled by numba;
+    * ``_moving_points``: what the margin's error message calls the ``C_i``.
 
-    Raises
-    ------
-    InvalidInputError
-        If a base point or platform value is not finite (or the platform is
-        flat), or a link length is not a finite positive number.
+    Subclasses are frozen dataclasses with the fields ``a1, a2, a3, d1, d3,
+    beta``.
     """
 
-    a1: tuple = (0.0, 0.0)
-    a2: tuple = (15.91, 0.0)
-    a3: tuple = (0.0, 10.0)
-    d1: float = 17.04
-    d3: float = 20.84
-    beta: float = beta_from_sides(17.04, 16.54, 20.84)
-    l1: float = 8.0
-    l2: float = 12.0
-
-    joint_names = ("th1", "th2", "th3")
+    joint_names = ("q1", "q2", "q3")
     pose_names = ("x", "y", "alpha")
     angular = (False, False, True)
     mode_coordinate = 2
     max_solutions = MAX_SOLUTIONS
-
-    def __post_init__(self):
-        # The 3-RPR of the same base points and platform checks and converts
-        # them, so that both mechanisms accept and refuse the same values.
-        platform = ThreeRPR(a1=self.a1, a2=self.a2, a3=self.a3, d1=self.d1, d3=self.d3,
-                            beta=self.beta)
-        for name in ("a1", "a2", "a3", "d1", "d3", "beta"):
-            object.__setattr__(self, name, getattr(platform, name))
-        for name in ("l1", "l2"):
-            object.__setattr__(self, name, positive_length(getattr(self, name), name))
+    _moving_points = "base points C_i"
 
     @functools.cached_property
     def platform(self):
         """The 3-RPR of the same base points and platform: with the joints
-        fixed the 3-RRR is it with the elbows as base points."""
+        fixed the mechanism is it with the C_i as base points."""
         return ThreeRPR(a1=self.a1, a2=self.a2, a3=self.a3, d1=self.d1, d3=self.d3,
                         beta=self.beta)
 
@@ -130,30 +100,8 @@ class ThreeRRR(Mechanism):
         orientation column of ``Jx`` commensurable with positions."""
         return self.platform.scale
 
-    @functools.cached_property
-    def parameters(self):
-        """``(a1x, a1y, a2x, a2y, a3x, a3y, d1, d3, beta, l1, l2)``: the geometry
-        as the constraint equations (and their compiled form) take it."""
-        return (*self.a1, *self.a2, *self.a3, self.d1, self.d3, self.beta, self.l1, self.l2)
-
-    def to_dict(self):
-        """Plain-data form, for JSON, messages and cache keys."""
-        return {"kind": self.kind, "a1": list(self.a1), "a2": list(self.a2),
-                "a3": list(self.a3), "d1": self.d1, "d3": self.d3, "beta": self.beta,
-                "l1": self.l1, "l2": self.l2}
-
-    @classmethod
-    def from_dict(cls, data):
-        """Inverse of :meth:`to_dict`."""
-        try:
-            return cls(a1=tuple(data["a1"]), a2=tuple(data["a2"]), a3=tuple(data["a3"]),
-                       d1=data["d1"], d3=data["d3"], beta=data["beta"], l1=data["l1"],
-                       l2=data["l2"])
-        except (KeyError, TypeError) as exc:
-            raise InvalidInputError(f"malformed 3-RRR: {exc}") from exc
-
-    def elbows(self, joints):
-        """Elbows ``C_i = A_i + l1 (cos th_i, sin th_i)`` of joints ``(..., 3)``.
+    def base_points(self, joints):
+        """The moving base points ``C_i`` of joints ``(..., 3)``.
 
         Returns
         -------
@@ -161,12 +109,10 @@ class ThreeRRR(Mechanism):
             [length unit].
         """
         joints = finite_vectors(joints, "joints", 3)
-        c1x, c1y, c2x, c2y, c3x, c3y, *_ = _elbow_parameters(
+        c1x, c1y, c2x, c2y, c3x, c3y, *_ = self._base_parameters(
             self.parameters, joints[..., 0], joints[..., 1], joints[..., 2])
         return np.stack([np.stack([c1x, c1y], -1), np.stack([c2x, c2y], -1),
                          np.stack([c3x, c3y], -1)], -2)
-
-    # The Mechanism interface, served by the functions below.
 
     def check_joints(self, joints):
         """Refuse joints that are not finite numbers of shape (..., 3).
@@ -195,8 +141,8 @@ class ThreeRRR(Mechanism):
         joints = finite_vectors(joints, "joints", 3)
         if joints.ndim != 2:
             raise InvalidInputError(f"joints must have shape (n, 3), got {joints.shape}")
-        legs = np.full(joints.shape, self.l2)
-        count, poses = solve_with_bases(legs, self.elbows(joints), self.platform)
+        legs = np.full(joints.shape, self.distal)
+        count, poses = solve_with_bases(legs, self.base_points(joints), self.platform)
         # Where two roots of the sextic are close the root finder leaves
         # their poses off the legs by up to about 1e-5 [length unit**2], even
         # when both are regular (two assembly modes at nearly one alpha); the
@@ -244,11 +190,10 @@ class ThreeRRR(Mechanism):
         """
         if joints is None:
             raise TypeError(
-                "the 3-RRR's margin needs the joints as well as the poses: a pose does not "
-                "fix the elbows C_i (each may sit on either side of the line from its base "
-                "to its platform point), so the sign of det Jx is not a function of the "
-                "pose; call margin(poses, joints)")
-        rows = _batch_rows(poses, joints, self.parameters)
+                f"the {self.kind}'s margin needs the joints as well as the poses: a pose "
+                f"does not fix the {self._moving_points}, so the sign of det Jx is not a "
+                "function of the pose; call margin(poses, joints)")
+        rows = self._rows(poses, joints)
         norms = _row_norms(rows, self.scale)
         ok = (norms[0] > 0) & (norms[1] > 0) & (norms[2] > 0)
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -261,13 +206,13 @@ class ThreeRRR(Mechanism):
 
     def predict(self, poses, joints_from, joints_to):
         """Euler step ``Jx dx = -Jq dq`` of poses ``(..., 3)`` for a change of
-        joints, the change taken the short way round each joint's turn."""
+        joints (the change as ``_change`` takes it: the short way round for
+        angles)."""
         poses = np.asarray(poses, dtype=float)
         joints_from = np.asarray(joints_from, dtype=float)
-        change = _turn_difference(np.asarray(joints_to, dtype=float) - joints_from)
-        rows = _batch_rows(poses, joints_from, self.parameters)
-        rates = _joint_rates(rows, self.l1, joints_from[..., 0], joints_from[..., 1],
-                             joints_from[..., 2])
+        change = self._change(joints_from, np.asarray(joints_to, dtype=float))
+        rows = self._rows(poses, joints_from)
+        rates = self._rates(rows, joints_from)
         return poses + _solve_rows(rows, *(rate * change[..., i] for i, rate in enumerate(rates)))
 
     def correct(self, poses, joints, iterations):
@@ -286,27 +231,27 @@ class ThreeRRR(Mechanism):
             Corrected poses (alpha is not wrapped).
         """
         poses = np.asarray(poses, dtype=float)
-        l2 = self.l2
+        l2 = self.distal
         for _ in range(iterations):
-            rows = _batch_rows(poses, joints, self.parameters)
+            rows = self._rows(poses, joints)
             poses = poses - 0.5 * _solve_rows(rows, *_leg_residuals(rows, (l2, l2, l2)))
         return poses
 
     def residual(self, poses, joints):
-        """Constraint residuals ``F_i = |B_i - C_i|**2 - l2**2``.
+        """Constraint residuals ``F_i = |B_i - C_i|**2 - distal**2``.
 
         Returns
         -------
         ndarray, shape (..., 3)
             One per leg [length unit**2].
         """
-        rows = _batch_rows(poses, joints, self.parameters)
-        l2 = self.l2
+        rows = self._rows(poses, joints)
+        l2 = self.distal
         return np.stack(np.broadcast_arrays(*_leg_residuals(rows, (l2, l2, l2))), axis=-1)
 
     def step(self, pose, joints_from, joints_to):
         x, y, alpha = (float(v) for v in pose)
-        ok, x, y, alpha, margin = _compiled_step(
+        ok, x, y, alpha, margin = self._compiled_step(
             self.parameters, self.scale, x, y, alpha, *(float(v) for v in joints_from),
             *(float(v) for v in joints_to))
         return ((x, y, alpha), margin) if ok else None
@@ -315,16 +260,16 @@ class ThreeRRR(Mechanism):
     def step_kernel(self):
         # Its address taken once: passing the dispatcher itself would look it
         # up, under numba's compiler lock, at every call.
-        compiled = CompileResultWAP(_step_kernel.overloads[STEP_KERNEL_SIGNATURE.args])
+        compiled = CompileResultWAP(self._step_kernel.overloads[STEP_KERNEL_SIGNATURE.args])
         # Typed once: numba would otherwise infer its type at every call.
         compiled._numba_type_ = types.FunctionType(STEP_KERNEL_SIGNATURE)
         return compiled, np.array([*self.parameters, self.scale])
 
-
-# The issue's 3-RRR: the paper's base points and platform, l1 = 8 and l2 = 12
-# on every leg.  Every joint vector of its slice th1 = 0 is assembled, with
-# 2, 4 or 6 solutions.
-DEFAULT_THREE_RRR = ThreeRRR()
+    def _rows(self, poses, joints):
+        poses, joints = np.asarray(poses, dtype=float), np.asarray(joints, dtype=float)
+        return _row_terms(poses[..., 0], poses[..., 1], poses[..., 2],
+                          self._base_parameters(self.parameters, joints[..., 0],
+                                                joints[..., 1], joints[..., 2]))
 
 
 # The constraint equations are the 3-RPR's with the elbows as base points:
@@ -352,13 +297,6 @@ def _joint_rates(rows, l1, t1, t2, t3):
 def _turn_difference(change):
     """Joint changes taken the short way round: in [-pi, pi]."""
     return change - 2 * np.pi * np.floor(change / (2 * np.pi) + 0.5)
-
-
-def _batch_rows(poses, joints, parameters):
-    poses, joints = np.asarray(poses, dtype=float), np.asarray(joints, dtype=float)
-    return _row_terms(poses[..., 0], poses[..., 1], poses[..., 2],
-                      _elbow_parameters(parameters, joints[..., 0], joints[..., 1],
-                                        joints[..., 2]))
 
 
 def _solve_rows(rows, r1, r2, r3):
@@ -404,3 +342,115 @@ def _step_kernel(parameters, pose, joints_from, joints_to):
         return np.nan
     pose[0], pose[1], pose[2] = x, y, alpha
     return margin
+
+
+@register_mechanism("3-RRR")
+@dataclass(frozen=True)
+class ThreeRRR(_MovingBaseRPR):
+    """The planar 3-RRR parallel manipulator.
+
+    Joints are the actuated base angles ``(th1, th2, th3)`` [rad]; poses are
+    ``(x, y, alpha)`` [length unit, length unit, rad] as the 3-RPR's, and
+    ``alpha`` chooses the assembly mode of a request.  Batches follow
+    :class:`~rpr3_gwr_core.mechanisms.base.Mechanism`: joints and poses
+    ``(..., 3)``; :meth:`solve` takes joints ``(n, 3)`` and gives counts
+    ``(n,)`` (uint8) and poses ``(n, 6, 3)`` sorted by alpha in (-pi, pi],
+    NaN beyond the count.
+
+    Attributes
+    ----------
+    a1, a2, a3 : tuple of float, shape (2,)
+        Base joints A1..A3 [length unit].
+    d1 : float
+        Platform side B1B2 [length unit].
+    d3 : float
+        Platform side B1B3 [length unit].
+    beta : float
+        Angle at B1 from B1B2 to B1B3 [rad].
+    l1 : float
+        Proximal links A_i C_i [length unit].
+    l2 : float
+        Distal links C_i B_i [length unit].
+
+    Raises
+    ------
+    InvalidInputError
+        If a base point or platform value is not finite (or the platform is
+        flat), or a link length is not a finite positive number.
+    """
+
+    a1: tuple = (0.0, 0.0)
+    a2: tuple = (15.91, 0.0)
+    a3: tuple = (0.0, 10.0)
+    d1: float = 17.04
+    d3: float = 20.84
+    beta: float = beta_from_sides(17.04, 16.54, 20.84)
+    l1: float = 8.0
+    l2: float = 12.0
+
+    joint_names = ("th1", "th2", "th3")
+    _moving_points = ("elbows C_i (each may sit on either side of the line from its base "
+                      "to its platform point)")
+
+    def __post_init__(self):
+        # The 3-RPR of the same base points and platform checks and converts
+        # them, so that both mechanisms accept and refuse the same values.
+        platform = ThreeRPR(a1=self.a1, a2=self.a2, a3=self.a3, d1=self.d1, d3=self.d3,
+                            beta=self.beta)
+        for name in ("a1", "a2", "a3", "d1", "d3", "beta"):
+            object.__setattr__(self, name, getattr(platform, name))
+        for name in ("l1", "l2"):
+            object.__setattr__(self, name, positive_length(getattr(self, name), name))
+
+    @functools.cached_property
+    def parameters(self):
+        """``(a1x, a1y, a2x, a2y, a3x, a3y, d1, d3, beta, l1, l2)``: the geometry
+        as the constraint equations (and their compiled form) take it."""
+        return (*self.a1, *self.a2, *self.a3, self.d1, self.d3, self.beta, self.l1, self.l2)
+
+    def to_dict(self):
+        """Plain-data form, for JSON, messages and cache keys."""
+        return {"kind": self.kind, "a1": list(self.a1), "a2": list(self.a2),
+                "a3": list(self.a3), "d1": self.d1, "d3": self.d3, "beta": self.beta,
+                "l1": self.l1, "l2": self.l2}
+
+    @classmethod
+    def from_dict(cls, data):
+        """Inverse of :meth:`to_dict`."""
+        try:
+            return cls(a1=tuple(data["a1"]), a2=tuple(data["a2"]), a3=tuple(data["a3"]),
+                       d1=data["d1"], d3=data["d3"], beta=data["beta"], l1=data["l1"],
+                       l2=data["l2"])
+        except (KeyError, TypeError) as exc:
+            raise InvalidInputError(f"malformed 3-RRR: {exc}") from exc
+
+    @property
+    def distal(self):
+        """The legs' length of the 3-RPR it reduces to: ``l2``."""
+        return self.l2
+
+    _base_parameters = staticmethod(_elbow_parameters)
+    _compiled_step = staticmethod(_compiled_step)
+    _step_kernel = staticmethod(_step_kernel)
+
+    def _rates(self, rows, joints):
+        return _joint_rates(rows, self.l1, joints[..., 0], joints[..., 1], joints[..., 2])
+
+    def _change(self, joints_from, joints_to):
+        return _turn_difference(joints_to - joints_from)
+
+    def elbows(self, joints):
+        """Elbows ``C_i = A_i + l1 (cos th_i, sin th_i)`` of joints ``(..., 3)``.
+
+        Returns
+        -------
+        ndarray, shape (..., 3, 2)
+            [length unit].
+        """
+        return self.base_points(joints)
+
+
+# The issue's 3-RRR: the paper's base points and platform, l1 = 8 and l2 = 12
+# on every leg.  Every joint vector of its slice th1 = 0 is assembled, with
+# 2, 4 or 6 solutions.
+DEFAULT_THREE_RRR = ThreeRRR()
