@@ -34,7 +34,7 @@ from numba.extending import register_jitable
 
 from ..exceptions import InvalidInputError
 from .base import STEP_KERNEL_SIGNATURE, positive_length, register_mechanism
-from .rpr3 import ThreeRPR, _adjugate_product, _corrected, _row_terms, beta_from_sides
+from .rpr3 import _adjugate_product, _corrected, _row_terms, beta_from_sides
 from .rrr3 import _MovingBaseRPR
 
 __all__ = ["ThreePRR", "DEFAULT_THREE_PRR"]
@@ -160,12 +160,7 @@ class ThreePRR(_MovingBaseRPR):
                       "lines)")
 
     def __post_init__(self):
-        # The 3-RPR of the same base points and platform checks and converts
-        # them, so that both mechanisms accept and refuse the same values.
-        platform = ThreeRPR(a1=self.a1, a2=self.a2, a3=self.a3, d1=self.d1, d3=self.d3,
-                            beta=self.beta)
-        for name in ("a1", "a2", "a3", "d1", "d3", "beta"):
-            object.__setattr__(self, name, getattr(platform, name))
+        self._check_platform()
         for name in ("gamma1", "gamma2", "gamma3"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, numbers.Real) \
@@ -181,23 +176,6 @@ class ThreePRR(_MovingBaseRPR):
         form) take it."""
         return (*self.a1, *self.a2, *self.a3, self.d1, self.d3, self.beta, self.gamma1,
                 self.gamma2, self.gamma3, self.l)
-
-    def to_dict(self):
-        """Plain-data form, for JSON, messages and cache keys."""
-        return {"kind": self.kind, "a1": list(self.a1), "a2": list(self.a2),
-                "a3": list(self.a3), "gamma1": self.gamma1, "gamma2": self.gamma2,
-                "gamma3": self.gamma3, "l": self.l, "d1": self.d1, "d3": self.d3,
-                "beta": self.beta}
-
-    @classmethod
-    def from_dict(cls, data):
-        """Inverse of :meth:`to_dict`."""
-        try:
-            return cls(a1=tuple(data["a1"]), a2=tuple(data["a2"]), a3=tuple(data["a3"]),
-                       gamma1=data["gamma1"], gamma2=data["gamma2"], gamma3=data["gamma3"],
-                       l=data["l"], d1=data["d1"], d3=data["d3"], beta=data["beta"])
-        except (KeyError, TypeError) as exc:
-            raise InvalidInputError(f"malformed 3-PRR: {exc}") from exc
 
     @property
     def distal(self):

@@ -24,6 +24,7 @@ not treated as one.  As the five-bar's, the pose alone does not fix the
 elbows, so :meth:`ThreeRRR.margin` needs the joints.
 """
 
+import dataclasses
 from dataclasses import dataclass
 import functools
 import math
@@ -86,6 +87,31 @@ class _MovingBaseRPR(Mechanism):
     mode_coordinate = 2
     max_solutions = MAX_SOLUTIONS
     _moving_points = "base points C_i"
+    _POINTS = ("a1", "a2", "a3")
+
+    def _check_platform(self):
+        """Check and convert the base points and platform as the 3-RPR of the
+        same ones does, so that both accept and refuse the same values."""
+        platform = ThreeRPR(a1=self.a1, a2=self.a2, a3=self.a3, d1=self.d1, d3=self.d3,
+                            beta=self.beta)
+        for name in ("a1", "a2", "a3", "d1", "d3", "beta"):
+            object.__setattr__(self, name, getattr(platform, name))
+
+    def to_dict(self):
+        """Plain-data form, for JSON, messages and cache keys: the kind and
+        every field, points as lists."""
+        return {"kind": self.kind, **{
+            f.name: list(getattr(self, f.name)) if f.name in self._POINTS
+            else getattr(self, f.name) for f in dataclasses.fields(self)}}
+
+    @classmethod
+    def from_dict(cls, data):
+        """Inverse of :meth:`to_dict`."""
+        try:
+            return cls(**{f.name: tuple(data[f.name]) if f.name in cls._POINTS
+                          else data[f.name] for f in dataclasses.fields(cls)})
+        except (KeyError, TypeError) as exc:
+            raise InvalidInputError(f"malformed {cls.kind}: {exc}") from exc
 
     @functools.cached_property
     def platform(self):
@@ -393,12 +419,7 @@ class ThreeRRR(_MovingBaseRPR):
                       "to its platform point)")
 
     def __post_init__(self):
-        # The 3-RPR of the same base points and platform checks and converts
-        # them, so that both mechanisms accept and refuse the same values.
-        platform = ThreeRPR(a1=self.a1, a2=self.a2, a3=self.a3, d1=self.d1, d3=self.d3,
-                            beta=self.beta)
-        for name in ("a1", "a2", "a3", "d1", "d3", "beta"):
-            object.__setattr__(self, name, getattr(platform, name))
+        self._check_platform()
         for name in ("l1", "l2"):
             object.__setattr__(self, name, positive_length(getattr(self, name), name))
 
@@ -407,22 +428,6 @@ class ThreeRRR(_MovingBaseRPR):
         """``(a1x, a1y, a2x, a2y, a3x, a3y, d1, d3, beta, l1, l2)``: the geometry
         as the constraint equations (and their compiled form) take it."""
         return (*self.a1, *self.a2, *self.a3, self.d1, self.d3, self.beta, self.l1, self.l2)
-
-    def to_dict(self):
-        """Plain-data form, for JSON, messages and cache keys."""
-        return {"kind": self.kind, "a1": list(self.a1), "a2": list(self.a2),
-                "a3": list(self.a3), "d1": self.d1, "d3": self.d3, "beta": self.beta,
-                "l1": self.l1, "l2": self.l2}
-
-    @classmethod
-    def from_dict(cls, data):
-        """Inverse of :meth:`to_dict`."""
-        try:
-            return cls(a1=tuple(data["a1"]), a2=tuple(data["a2"]), a3=tuple(data["a3"]),
-                       d1=data["d1"], d3=data["d3"], beta=data["beta"], l1=data["l1"],
-                       l2=data["l2"])
-        except (KeyError, TypeError) as exc:
-            raise InvalidInputError(f"malformed 3-RRR: {exc}") from exc
 
     @property
     def distal(self):
