@@ -30,6 +30,8 @@ from rpr3_gwr_core.planning.planner import Planner
 from rpr3_gwr_core.workspace.grid import Axis, Grid
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
 
+from moving_base_reference import MovingBaseReference, check_kernel_agrees_with_step, wrap
+
 CONFIG = pathlib.Path(__file__).resolve().parents[3] / "config"
 
 # The default geometry, written again rather than read from the mechanism:
@@ -47,36 +49,9 @@ S1 = 5.0
 Q_CHANGE = (5.0, 26.5, 10.0)
 
 
-def wrap(angle):
-    return np.arctan2(np.sin(angle), np.cos(angle))
-
-
-def platform(pose):
-    """B1, B2, B3 of poses (..., 3), shape (..., 3, 2)."""
-    pose = np.asarray(pose, dtype=float)
-    x, y, alpha = pose[..., 0], pose[..., 1], pose[..., 2]
-    b1 = np.stack([x, y], -1)
-    b2 = b1 + D1 * np.stack([np.cos(alpha), np.sin(alpha)], -1)
-    b3 = b1 + D3 * np.stack([np.cos(alpha + BETA), np.sin(alpha + BETA)], -1)
-    return np.stack([b1, b2, b3], -2)
-
-
 def sliders(s):
     """C_i = A_i + s_i e_i of joints (..., 3), shape (..., 3, 2)."""
     return A + np.asarray(s, dtype=float)[..., None] * E
-
-
-def reference_residual(pose, s):
-    return np.sum((platform(pose) - sliders(s)) ** 2, -1) - L**2
-
-
-def reference_margin(pose, s):
-    """det of the rows (u_i, (B_i - B1) x u_i / scale), each row normalised."""
-    b = platform(pose)
-    u, r = b - sliders(s), b - b[..., :1, :]
-    w = (r[..., 0] * u[..., 1] - r[..., 1] * u[..., 0]) / SCALE
-    rows = np.concatenate([u, w[..., None]], -1)
-    return np.linalg.det(rows / np.linalg.norm(rows, axis=-1, keepdims=True))
 
 
 def slider_value(b, i, side):
@@ -89,53 +64,13 @@ def slider_value(b, i, side):
     return -eg + side * np.sqrt(np.where(disc >= 0, disc, np.nan))
 
 
-def torus_map(s1, phi, alpha, side2, side3):
-    """``(s2, s3, pose)`` of torus points (phi, alpha) at fixed s1."""
-    phi, alpha = np.broadcast_arrays(np.asarray(phi, float), np.asarray(alpha, float))
-    c1 = A[0] + s1 * E[0]
-    pose = np.stack([c1[0] + L * np.cos(phi), c1[1] + L * np.sin(phi), alpha], -1)
-    b = platform(pose)
-    return slider_value(b[..., 1, :], 1, side2), slider_value(b[..., 2, :], 2, side3), pose
+REFERENCE = MovingBaseReference(sliders, slider_value, L, D1, D3, BETA, angular=False)
+reference_residual, reference_margin = REFERENCE.residual, REFERENCE.margin
+torus_map, follow = REFERENCE.torus_map, REFERENCE.follow
 
 
 def torus_preimages(s, n=720):
-    """Every pose of joints ``s``: the torus points mapped onto (s2, s3),
-    from the local minima of the mismatch on an n x n scan refined by
-    Newton, sorted by alpha."""
-    s1, s2, s3 = s
-    grid = 2 * math.pi * np.arange(n) / n - math.pi
-    phi, alpha = np.meshgrid(grid, grid, indexing="ij")
-    found = []
-    for side2 in (1, -1):
-        for side3 in (1, -1):
-            def mismatch(p, a, side2=side2, side3=side3):
-                g2, g3, _ = torus_map(s1, p, a, side2, side3)
-                return np.stack([g2 - s2, g3 - s3], -1)
-
-            size = np.max(np.abs(mismatch(phi, alpha)), -1)
-            size = np.where(np.isnan(size), np.inf, size)
-            local = size < 2.0
-            for di in (-1, 0, 1):
-                for dj in (-1, 0, 1):
-                    local &= size <= np.roll(size, (di, dj), axis=(0, 1))
-            p, a = phi[local], alpha[local]
-            h = 1e-7
-            with np.errstate(invalid="ignore"):
-                for _ in range(60):
-                    g = mismatch(p, a)
-                    jp = (mismatch(p + h, a) - mismatch(p - h, a)) / (2 * h)
-                    ja = (mismatch(p, a + h) - mismatch(p, a - h)) / (2 * h)
-                    det = jp[:, 0] * ja[:, 1] - ja[:, 0] * jp[:, 1]
-                    dp = (ja[:, 1] * g[:, 0] - ja[:, 0] * g[:, 1]) / det
-                    da = (jp[:, 0] * g[:, 1] - jp[:, 1] * g[:, 0]) / det
-                    shrink = np.maximum(1.0, np.hypot(dp, da) / 0.1)
-                    p, a = p - dp / shrink, a - da / shrink
-                converged = np.max(np.abs(mismatch(p, a)), -1) < 1e-9
-            for pose in torus_map(s1, p[converged], a[converged], side2, side3)[2]:
-                pose = np.array([pose[0], pose[1], wrap(pose[2])])
-                if all(np.max(np.abs(pose - other)) > 1e-6 for other in found):
-                    found.append(pose)
-    return np.array(sorted(found, key=lambda pose: pose[2])).reshape(-1, 3)
+    return REFERENCE.torus_preimages(s, window=2.0, n=n)
 
 
 # --- the mechanism as a value ---------------------------------------------------
@@ -222,27 +157,8 @@ def test_solutions_are_the_torus_preimages(s, n_solutions):
 def test_torus_points_are_found_and_every_solution_fits():
     """Joints made from a dense torus sample at s1 = 5: each has the pose it
     was made from among its solutions, and every solution fits the legs."""
-    n = 90
-    grid = 2 * math.pi * (np.arange(n) + 0.5) / n - math.pi
-    phi, alpha = (v.ravel() for v in np.meshgrid(grid, grid, indexing="ij"))
-    seen = np.zeros(7, int)
-    for side2 in (1, -1):
-        for side3 in (1, -1):
-            with np.errstate(invalid="ignore"):
-                s2, s3, made = torus_map(S1, phi, alpha, side2, side3)
-            ok = np.isfinite(s2) & np.isfinite(s3)
-            joints = np.stack([np.full(ok.sum(), S1), s2[ok], s3[ok]], -1)
-            made = np.concatenate([made[ok, :2], wrap(made[ok, 2:])], -1)
-            count, poses = DEFAULT_THREE_PRR.solve(joints)
-            seen += np.bincount(count, minlength=7)
-            residual = np.abs(reference_residual(poses, joints[:, None, :]))
-            assert np.nanmax(residual) < 1e-9 * SCALE**2
-            distance = np.max(np.abs(poses - made[:, None, :]), -1)
-            nearest = np.nanmin(np.where(np.isnan(distance), np.inf, distance), -1)
-            regular = np.abs(reference_margin(made, joints)) > 1e-3
-            assert np.max(nearest[regular]) < 1e-6
+    seen = REFERENCE.check_torus_points(DEFAULT_THREE_PRR, S1)
     assert seen[0] == 0 and seen[2] and seen[4] and seen[6]
-
 
 def test_never_more_than_six_and_counts_are_even():
     rng = np.random.default_rng(5)
@@ -258,44 +174,18 @@ def test_never_more_than_six_and_counts_are_even():
 # --- continuation -----------------------------------------------------------------
 
 def test_step_follows_each_solution():
-    m = DEFAULT_THREE_PRR
-    q0 = np.array([5.0, 16.49, 0.83])
-    count, poses = m.solve(q0[None])
-    direction = np.array([0.3, -0.5, 0.4])
-    for pose in poses[0, : count[0]]:
-        q, sign = q0, np.sign(reference_margin(pose, q0))
-        for _ in range(40):
-            target = q + 0.01 * direction
-            result = m.step(pose, q, target)
-            assert result is not None
-            pose, margin = np.array(result[0]), result[1]
-            assert np.max(np.abs(reference_residual(pose, target))) < 1e-9 * SCALE**2
-            assert margin == pytest.approx(reference_margin(pose, target), abs=1e-10)
-            assert np.sign(margin) == sign
-            q = target
-        count_end, poses_end = m.solve(q[None])
-        assert np.min(np.max(np.abs(poses_end[0, : count_end[0]] - pose), -1)) < 1e-8
+    REFERENCE.check_step_follows_each_solution(DEFAULT_THREE_PRR, (5.0, 16.49, 0.83), 0.01)
 
 
 def test_compiled_step_kernel_agrees_with_step_and_predict_and_correct():
     m = DEFAULT_THREE_PRR
-    count, poses = m.solve(np.array([Q_CHANGE]))
-    kernel, parameters = m.step_kernel
-    assert kernel is not None and parameters.shape == (14,)
     target = np.array(Q_CHANGE) + 0.05
-    for pose in poses[0, : count[0]]:
+    for pose in check_kernel_agrees_with_step(m, _step_kernel, Q_CHANGE, target, 14):
         expected = m.step(pose, Q_CHANGE, target)
-        buffer = pose.copy()
-        margin = _step_kernel(parameters, buffer, np.array(Q_CHANGE), target)
-        assert expected is not None
-        assert np.allclose(buffer, expected[0], rtol=0, atol=1e-13)
-        assert margin == pytest.approx(expected[1], abs=1e-13)
         corrected = m.correct(m.predict(pose, np.array(Q_CHANGE), target), target, 6)
         assert np.allclose(corrected, expected[0], atol=1e-9)
         assert np.max(np.abs(reference_residual(corrected, target))) < 1e-10 * SCALE**2
 
-
-# --- the slice s1 = 5 -----------------------------------------------------------------
 
 @pytest.fixture(scope="module")
 def slice_roadmap():
@@ -315,31 +205,6 @@ def test_slice_counts_regions_patches_and_gates(slice_roadmap):
         assert field.count[cell] == len(torus_preimages(q, n=360))
     # At this resolution (measured): 12 regions, 40 patches, 51 gates.
     assert seg.n_regions == 12 and len(seg.patches) == 40 and len(seg.gates) == 51
-
-
-def follow(pose, joints, steps=400):
-    """Own continuation along a polyline of joints: Newton with a
-    finite-difference Jacobian from the previous pose at each dense sample;
-    returns the poses at the samples and at the vertices."""
-    def newton(p, q):
-        for _ in range(20):
-            f = reference_residual(p, q)
-            jac = np.stack([(reference_residual(p + e, q) - reference_residual(p - e, q)) / 2e-7
-                            for e in 1e-7 * np.eye(3)], -1)
-            p = p - np.linalg.solve(jac, f)
-            if np.max(np.abs(f)) < 1e-11 * SCALE**2:
-                break
-        return p
-
-    followed, vertices = [], [pose]
-    for q0, q1 in zip(joints[:-1], joints[1:]):
-        for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
-            q = q0 + s * (q1 - q0)
-            new = newton(pose, q)
-            followed.append((q, new, np.max(np.abs(new - pose))))
-            pose = new
-        vertices.append(pose)
-    return followed, vertices
 
 
 def test_non_singular_assembly_mode_change(slice_roadmap):

@@ -29,6 +29,8 @@ from rpr3_gwr_core.planning.planner import Planner
 from rpr3_gwr_core.workspace.grid import Axis, Grid
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
 
+from moving_base_reference import MovingBaseReference, check_kernel_agrees_with_step, wrap
+
 # The issue's geometry, written again rather than read from the mechanism:
 # the paper's base points and platform (sides 17.04, 16.54, 20.84), l1 = 8
 # and l2 = 12 on every leg.
@@ -41,36 +43,9 @@ SCALE = max(D1, D2, D3)
 Q6 = (0.0, 0.13499, 0.55223)
 
 
-def wrap(angle):
-    return np.arctan2(np.sin(angle), np.cos(angle))
-
-
-def platform(pose):
-    """B1, B2, B3 of poses (..., 3), shape (..., 3, 2)."""
-    pose = np.asarray(pose, dtype=float)
-    x, y, alpha = pose[..., 0], pose[..., 1], pose[..., 2]
-    b1 = np.stack([x, y], -1)
-    b2 = b1 + D1 * np.stack([np.cos(alpha), np.sin(alpha)], -1)
-    b3 = b1 + D3 * np.stack([np.cos(alpha + BETA), np.sin(alpha + BETA)], -1)
-    return np.stack([b1, b2, b3], -2)
-
-
 def elbows(th):
     th = np.asarray(th, dtype=float)
     return A + L1 * np.stack([np.cos(th), np.sin(th)], -1)
-
-
-def reference_residual(pose, th):
-    return np.sum((platform(pose) - elbows(th)) ** 2, -1) - L2**2
-
-
-def reference_margin(pose, th):
-    """det of the rows (u_i, (B_i - B1) x u_i / scale), each row normalised."""
-    b = platform(pose)
-    u, r = b - elbows(th), b - b[..., :1, :]
-    w = (r[..., 0] * u[..., 1] - r[..., 1] * u[..., 0]) / SCALE
-    rows = np.concatenate([u, w[..., None]], -1)
-    return np.linalg.det(rows / np.linalg.norm(rows, axis=-1, keepdims=True))
 
 
 def leg_angle(b, i, side):
@@ -85,52 +60,13 @@ def leg_angle(b, i, side):
     return np.arctan2(along * ey + side * across * ex, along * ex - side * across * ey)
 
 
-def torus_map(th1, phi, alpha, side2, side3):
-    """``(th2, th3, pose)`` of torus points (phi, alpha) at fixed th1."""
-    phi, alpha = np.broadcast_arrays(np.asarray(phi, float), np.asarray(alpha, float))
-    c1 = A[0] + L1 * np.array([math.cos(th1), math.sin(th1)])
-    pose = np.stack([c1[0] + L2 * np.cos(phi), c1[1] + L2 * np.sin(phi), alpha], -1)
-    b = platform(pose)
-    return leg_angle(b[..., 1, :], 1, side2), leg_angle(b[..., 2, :], 2, side3), pose
+REFERENCE = MovingBaseReference(elbows, leg_angle, L2, D1, D3, BETA, angular=True)
+reference_residual, reference_margin = REFERENCE.residual, REFERENCE.margin
+torus_map, follow = REFERENCE.torus_map, REFERENCE.follow
 
 
 def torus_preimages(th, n=720):
-    """Every pose of joints ``th``: the torus points mapped onto (th2, th3),
-    from the local minima of the mismatch on an n x n scan refined by
-    Newton, sorted by alpha."""
-    th1, th2, th3 = th
-    grid = 2 * math.pi * np.arange(n) / n - math.pi
-    phi, alpha = np.meshgrid(grid, grid, indexing="ij")
-    found = []
-    for side2 in (1, -1):
-        for side3 in (1, -1):
-            def mismatch(p, a, side2=side2, side3=side3):
-                g2, g3, _ = torus_map(th1, p, a, side2, side3)
-                return np.stack([wrap(g2 - th2), wrap(g3 - th3)], -1)
-
-            size = np.max(np.abs(mismatch(phi, alpha)), -1)
-            size = np.where(np.isnan(size), np.inf, size)
-            local = size < 0.5
-            for di in (-1, 0, 1):
-                for dj in (-1, 0, 1):
-                    local &= size <= np.roll(size, (di, dj), axis=(0, 1))
-            p, a = phi[local], alpha[local]
-            h = 1e-7
-            for _ in range(60):
-                g = mismatch(p, a)
-                jp = (mismatch(p + h, a) - mismatch(p - h, a)) / (2 * h)
-                ja = (mismatch(p, a + h) - mismatch(p, a - h)) / (2 * h)
-                det = jp[:, 0] * ja[:, 1] - ja[:, 0] * jp[:, 1]
-                dp = (ja[:, 1] * g[:, 0] - ja[:, 0] * g[:, 1]) / det
-                da = (jp[:, 0] * g[:, 1] - jp[:, 1] * g[:, 0]) / det
-                shrink = np.maximum(1.0, np.hypot(dp, da) / 0.1)
-                p, a = p - dp / shrink, a - da / shrink
-            converged = np.max(np.abs(mismatch(p, a)), -1) < 1e-9
-            for pose in torus_map(th1, p[converged], a[converged], side2, side3)[2]:
-                pose = np.array([pose[0], pose[1], wrap(pose[2])])
-                if all(np.max(np.abs(pose - other)) > 1e-6 for other in found):
-                    found.append(pose)
-    return np.array(sorted(found, key=lambda pose: pose[2])).reshape(-1, 3)
+    return REFERENCE.torus_preimages(th, window=0.5, n=n)
 
 
 # --- the mechanism as a value ---------------------------------------------------
@@ -227,26 +163,8 @@ def test_solutions_are_the_torus_preimages(th, n_solutions):
 def test_torus_points_are_found_and_every_solution_fits():
     """Joints made from a dense torus sample at th1 = 0: each has the pose it
     was made from among its solutions, and every solution fits the legs."""
-    n = 90
-    grid = 2 * math.pi * (np.arange(n) + 0.5) / n - math.pi
-    phi, alpha = (v.ravel() for v in np.meshgrid(grid, grid, indexing="ij"))
-    seen = np.zeros(7, int)
-    for side2 in (1, -1):
-        for side3 in (1, -1):
-            th2, th3, made = torus_map(0.0, phi, alpha, side2, side3)
-            ok = np.isfinite(th2) & np.isfinite(th3)
-            joints = np.stack([np.zeros(ok.sum()), th2[ok], th3[ok]], -1)
-            made = np.concatenate([made[ok, :2], wrap(made[ok, 2:])], -1)
-            count, poses = DEFAULT_THREE_RRR.solve(joints)
-            seen += np.bincount(count, minlength=7)
-            residual = np.abs(reference_residual(poses, joints[:, None, :]))
-            assert np.nanmax(residual) < 1e-9 * SCALE**2
-            distance = np.max(np.abs(poses - made[:, None, :]), -1)
-            nearest = np.nanmin(np.where(np.isnan(distance), np.inf, distance), -1)
-            regular = np.abs(reference_margin(made, joints)) > 1e-3
-            assert np.max(nearest[regular]) < 1e-6
+    seen = REFERENCE.check_torus_points(DEFAULT_THREE_RRR, 0.0)
     assert seen[0] == 0 and seen[2] and seen[4] and seen[6]
-
 
 def test_never_more_than_six_and_counts_are_even():
     rng = np.random.default_rng(5)
@@ -262,37 +180,11 @@ def test_never_more_than_six_and_counts_are_even():
 # --- continuation -----------------------------------------------------------------
 
 def test_step_follows_each_solution():
-    m = DEFAULT_THREE_RRR
-    count, poses = m.solve(np.array([Q6]))
-    direction = np.array([0.3, -0.5, 0.4])
-    for pose in poses[0, : count[0]]:
-        q, sign = np.array(Q6), np.sign(reference_margin(pose, Q6))
-        for _ in range(40):
-            target = q + 0.002 * direction
-            result = m.step(pose, q, target)
-            assert result is not None
-            pose, margin = np.array(result[0]), result[1]
-            assert np.max(np.abs(reference_residual(pose, target))) < 1e-9 * SCALE**2
-            assert margin == pytest.approx(reference_margin(pose, target), abs=1e-10)
-            assert np.sign(margin) == sign
-            q = target
-        count_end, poses_end = m.solve(q[None])
-        assert np.min(np.max(np.abs(poses_end[0, : count_end[0]] - pose), -1)) < 1e-8
+    REFERENCE.check_step_follows_each_solution(DEFAULT_THREE_RRR, Q6, 0.002)
 
 
 def test_compiled_step_kernel_agrees_with_step():
-    m = DEFAULT_THREE_RRR
-    count, poses = m.solve(np.array([Q6]))
-    kernel, parameters = m.step_kernel
-    assert kernel is not None and parameters.shape == (12,)
-    target = np.array(Q6) + 0.01
-    for pose in poses[0, : count[0]]:
-        expected = m.step(pose, Q6, target)
-        buffer = pose.copy()
-        margin = _step_kernel(parameters, buffer, np.array(Q6), target)
-        assert expected is not None
-        assert np.allclose(buffer, expected[0], rtol=0, atol=1e-13)
-        assert margin == pytest.approx(expected[1], abs=1e-13)
+    check_kernel_agrees_with_step(DEFAULT_THREE_RRR, _step_kernel, Q6, np.array(Q6) + 0.01, 12)
 
 
 def test_batch_predict_and_correct():
@@ -429,32 +321,6 @@ def test_slice_has_two_four_and_six_solutions(slice_roadmap):
     count = field.count.reshape(shape)
     wrapping = [k for k in np.unique(region[region > 0]) if wraps_around(region == k)]
     assert wrapping and all(set(np.unique(count[region == k])) == {4} for k in wrapping)
-
-
-def follow(pose, joints, steps=400):
-    """Own continuation along a polyline of joints: Newton with a
-    finite-difference Jacobian from the previous pose at each dense sample;
-    returns the poses at the samples and at the vertices."""
-    def newton(p, q):
-        for _ in range(20):
-            f = reference_residual(p, q)
-            jac = np.stack([(reference_residual(p + e, q) - reference_residual(p - e, q)) / 2e-7
-                            for e in 1e-7 * np.eye(3)], -1)
-            p = p - np.linalg.solve(jac, f)
-            if np.max(np.abs(f)) < 1e-11 * SCALE**2:
-                break
-        return p
-
-    followed, vertices = [], [pose]
-    for q0, q1 in zip(joints[:-1], joints[1:]):
-        change = wrap(q1 - q0)
-        for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
-            q = q0 + s * change
-            new = newton(pose, q)
-            followed.append((q, new, np.max(np.abs(new - pose))))
-            pose = new
-        vertices.append(pose)
-    return followed, vertices
 
 
 def test_non_singular_assembly_mode_change(slice_roadmap):
