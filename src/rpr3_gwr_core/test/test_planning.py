@@ -22,7 +22,7 @@ from rpr3_gwr_core.planning.global_planning import feasibility, global_paths
 from rpr3_gwr_core.planning.planner import DEFAULT_CLEARANCE, PlanOptions, Planner
 from rpr3_gwr_core.workspace.grid import Axis, Grid
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
-from rpr3_gwr_core.planning.segments import shortcut_path
+from rpr3_gwr_core.planning.segments import Sheets, shortcut_path
 from rpr3_gwr_core.planning.trajectory import cut_corners, time_parameterize
 from rpr3_gwr_core.planning.validation import validate_path
 
@@ -50,7 +50,20 @@ def test_first_example_has_exactly_the_papers_two_shortest_global_paths(planner)
 def test_first_example_trajectory_crosses_exactly_the_planned_gates(planner, paper_roadmap):
     plan = planner.plan(Q1, Q2)
     chosen = plan.global_paths[plan.path_index].patches
-    visited = [int(p) for k, p in enumerate(plan.patches) if k == 0 or p != plan.patches[k - 1]]
+    # Follow the platform along the path, 8 samples per cell step, and name
+    # the patch of the solution it is on at each sample (where a segment
+    # clips the corner of a cell its sheet does not reach, none is near).
+    seg, grid = paper_roadmap.segmentation, paper_roadmap.grid
+    dense = np.vstack([np.linspace(a, b, max(2, int(8 * np.abs(b - a).max() / 0.125) + 1))[:-1]
+                       for a, b in zip(plan.joints[:-1], plan.joints[1:])] + [plan.joints[-1:]])
+    followed = validate_path(PAPER_GEOMETRY, dense, plan.poses[0], plan.poses[-1])
+    assert followed.ok
+    cells = grid.cells_of(dense[:, list(grid.axis_joints)])
+    distance = np.nan_to_num(PAPER_GEOMETRY.pose_distance(
+        seg.field.poses[cells], followed.poses[:, None, :]), nan=np.inf)
+    on_sheet = distance.min(axis=1) < 2.0
+    crossed = seg.patch[cells, np.argmin(distance, axis=1)][on_sheet]
+    visited = [int(p) for k, p in enumerate(crossed) if k == 0 or p != crossed[k - 1]]
     assert tuple(visited) == chosen
     assert plan.validation.ok and plan.validation.min_margin > 1e-3
     np.testing.assert_allclose(plan.joints[0], Q1[:3])
@@ -279,7 +292,7 @@ def _shortcut_on_square(points, patches, margins, clearance=0.1, split=False,
                         other_patch=(), low_margin=()):
     """shortcut_path on a 5 x 5 grid of step 1 that is patch 1 with margin
     0.5, except ``other_patch`` cells (patch 2) and ``low_margin`` cells
-    (margin 0.08)."""
+    (margin 0.08); one solution per cell, at the same pose."""
     grid = Grid((Axis(0, 0.0, 4.0, 1.0), Axis(1, 0.0, 4.0, 1.0)))
     patch_of = np.ones((grid.size, 1), dtype=np.int64)
     margin = np.full((grid.size, 1), 0.5)
@@ -287,9 +300,10 @@ def _shortcut_on_square(points, patches, margins, clearance=0.1, split=False,
         patch_of[5 * x + y] = 2
     for x, y in low_margin:
         margin[5 * x + y] = -0.08
+    sheets = Sheets(grid.lattice, 1.0, 2, patch_of, margin, np.zeros((grid.size, 1, 1)),
+                    np.zeros(1))
     return shortcut_path(np.array(points, dtype=float), np.array(patches, dtype=np.int64),
-                         np.array(margins, dtype=float), clearance, split, 2, 1.0,
-                         grid.lattice, patch_of, margin).tolist()
+                         np.array(margins, dtype=float), clearance, split, sheets).tolist()
 
 
 EDGE = [(0, 0), (1, 0), (2, 0), (3, 0), (4, 0), (4, 1), (4, 2), (4, 3), (4, 4)]
@@ -304,10 +318,17 @@ def test_shortcut_takes_the_longest_clear_jump_then_halved_ones():
     assert _shortcut_on_square(EDGE[:5], [1] * 5, [0.5] * 5, split=True) == [0, 2, 4]
 
 
-def test_shortcut_keeps_gate_crossings_and_the_margin_the_path_kept():
-    # A gate between (4, 0) on patch 1 and (4, 1) on patch 2: both stay.
+def test_shortcut_crosses_the_path_patches_in_order_and_keeps_the_margin():
+    # A gate between patch 1 and patch 2 along x = 4: the diagonal crosses
+    # it elsewhere than the edge path did, and may.
+    beyond = [(4, 1), (4, 2), (4, 3), (4, 4), (3, 4), (3, 3)]
     assert _shortcut_on_square(EDGE, [1] * 5 + [2] * 4, [0.5] * 9,
-                               other_patch=EDGE[5:]) == [0, 4, 5, 8]
+                               other_patch=beyond) == [0, 8]
+    # Patches are crossed in order only: the diagonal through (2, 2), on
+    # patch 2, and back on patch 1 at (3, 3) is refused, so the jumps stop
+    # at the gate.
+    assert _shortcut_on_square(EDGE, [1] * 5 + [2] * 4, [0.5] * 9,
+                               other_patch=EDGE[5:] + [(2, 2)]) == [0, 4, 8]
     # Cell (2, 2) has margin 0.08, below the clearance 0.1: refused, unless
     # a waypoint the jump replaces already passes that low.
     assert _shortcut_on_square(EDGE, [1] * 9, [0.5] * 9, low_margin=[(2, 2)]) == [0, 4, 8]

@@ -125,11 +125,11 @@ def test_a_local_failure_tries_the_next_global_path(paper_roadmap):
     first = planner.plan(Q1, Q2).global_paths[0].patches
     plan_locally = planner.local.plan
 
-    def cut_first(patches, *args):
+    def cut_first(patches, *args, **kwargs):
         # As if a patch of the first global path were cut between its gates.
         if tuple(patches) == first:
             raise InfeasiblePathError(f"no local path through patches {list(patches)}")
-        return plan_locally(patches, *args)
+        return plan_locally(patches, *args, **kwargs)
 
     planner.local.plan = cut_first
     plan = planner.plan(Q1, Q2)

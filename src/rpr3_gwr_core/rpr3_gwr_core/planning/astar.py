@@ -42,14 +42,14 @@ import numpy as np
 
 from .termination import monotonic
 
-__all__ = ["NodeGraph", "NodeCosts", "Guide", "WorkArrays", "adjacency", "node_positions",
+__all__ = ["NodeGraph", "NodeCosts", "Guide", "Stop", "WorkArrays", "adjacency", "node_positions",
            "edge_quanta", "gate_nodes", "work_arrays", "gate_distances", "layered_astar",
            "UNREACHED", "TIMED_OUT"]
 
 # Cost of a node the search did not reach; far above any path's, with room
 # to add estimates without overflow.
 UNREACHED = 2**50
-# The cost layered_astar returns when its deadline passed before the target.
+# The cost layered_astar returns when it stopped (deadline or node budget) before the target.
 TIMED_OUT = -1
 # Buckets of the open set's ring; estimates farther ahead wait in an overflow list.
 _RING = 4096
@@ -133,6 +133,22 @@ class Guide(NamedTuple):
     rest: np.ndarray
     landmark_start: np.ndarray
     landmark_goal: np.ndarray
+
+
+class Stop(NamedTuple):
+    """Where a search stops before its target.
+
+    Attributes
+    ----------
+    deadline : float
+        [s] on the monotonic clock (:func:`~.termination.monotonic`).
+    most_settled : int
+        Nodes settled at most: a budget of work, the same on any machine
+        and under any load, where a deadline is not.
+    """
+
+    deadline: float
+    most_settled: int
 
 
 class WorkArrays(NamedTuple):
@@ -280,11 +296,11 @@ def work_arrays(n_nodes, n_links):
 
 
 @numba.njit(cache=True, nogil=True)
-def _search(graph, costs, layer, sources, target, blocked, guide, deadline, work):
+def _search(graph, costs, layer, sources, target, blocked, guide, stop, work):
     """Least costs from ``sources`` through the layers, up to ``target`` (all
-    reachable nodes when it is -1), stopping when the monotonic clock passes
-    ``deadline``; returns how many nodes it touched, which are the first
-    entries of ``touched``, and whether it stopped for the deadline."""
+    reachable nodes when it is -1), stopping where ``stop`` says; returns
+    how many nodes it touched, which are the first entries of ``touched``,
+    and whether it stopped before the target."""
     # Unpacked once: the loop then reads plain local arrays, without the
     # reference counting of taking them out of a bundle at each use.
     indptr, indices, quanta, node_cell, node_patch, position, turn = graph
@@ -346,7 +362,8 @@ def _search(graph, costs, layer, sources, target, blocked, guide, deadline, work
         if u == target:
             break
         settled += 1
-        if settled % _CLOCK_PERIOD == 0 and monotonic() >= deadline:
+        if settled >= stop.most_settled or (settled % _CLOCK_PERIOD == 0
+                                            and monotonic() >= stop.deadline):
             return n_touched, True
         here = layer[node_patch[u]]
         cost_u = _node_cost(node_cost, node_margin, clearance, penalty, u)
@@ -427,19 +444,19 @@ def gate_distances(graph, costs, n_patches, k, sources, work):
         :data:`UNREACHED` where no source can be reached.
     """
     first = np.searchsorted(graph.node_patch, k)
-    stop = np.searchsorted(graph.node_patch, k, side="right")
+    end = np.searchsorted(graph.node_patch, k, side="right")
     layer = np.full(n_patches, -1, np.int32)
     layer[k] = 0
     empty = np.zeros(0, np.int64)
     n_touched, _ = _search(graph, costs, layer, sources, -1, empty,
-                           (0, empty, empty, empty, empty, empty), np.inf, work)
-    out = work.g[first:stop].copy()
+                           (0, empty, empty, empty, empty, empty), Stop(np.inf, 2**62), work)
+    out = work.g[first:end].copy()
     _reset(work.g, work.closed, work.touched, n_touched)
     return out
 
 
 @numba.njit(cache=True, nogil=True)
-def layered_astar(graph, costs, layer, source, target, blocked, guide, deadline, work):
+def layered_astar(graph, costs, layer, source, target, blocked, guide, stop, work):
     """Least-cost node path from ``source`` to ``target`` through the layers.
 
     Parameters
@@ -454,24 +471,23 @@ def layered_astar(graph, costs, layer, source, target, blocked, guide, deadline,
         Cells not to enter, ascending.
     guide : Guide
         The heuristic; its ``cost_floor`` at least 1.
-    deadline : float
-        [s] on the monotonic clock (:func:`~.termination.monotonic`); the
-        search stops there.
+    stop : Stop
+        Where the search stops before the target.
     work : WorkArrays
         Left as it was found.
 
     Returns
     -------
     nodes : ndarray of int64
-        The path, empty when the target cannot be reached or the deadline
-        passed first.
+        The path, empty when the target cannot be reached or the search
+        stopped first.
     cost : int
         Its cost: lengths in half quanta times node costs in units;
-        :data:`TIMED_OUT` when the deadline passed first.
+        :data:`TIMED_OUT` when the search stopped first.
     """
     sources = np.full(1, source, np.int64)
     n_touched, timed_out = _search(graph, costs, layer, sources, target, blocked, guide,
-                                   deadline, work)
+                                   stop, work)
     g, pred, closed = work.g, work.pred, work.closed
     cost = TIMED_OUT if timed_out else g[target]
     count = 0

@@ -30,12 +30,13 @@ requests in several threads plan at once.
 """
 
 from dataclasses import dataclass
+import heapq
 import math
 import threading
 
 import numpy as np
 
-from .astar import TIMED_OUT, UNREACHED, Guide, NodeCosts, layered_astar, work_arrays
+from .astar import TIMED_OUT, UNREACHED, Guide, NodeCosts, Stop, layered_astar, work_arrays
 from .index import COST_UNITS, LOW_MARGIN_FACTOR, patch_costs, patch_depth, patch_gate_distances
 from .termination import NEVER
 from ..exceptions import InfeasiblePathError, InvalidInputError, PlanningTimeoutError
@@ -89,6 +90,7 @@ class LocalPlanner:
         # the same values, and a part is marked filled only once written.
         self._extra_fields = {}
         self._extra_costs = {}
+        self._crossings = {}
         self._work = threading.local()
 
     def _costs(self, weight, k):
@@ -172,6 +174,87 @@ class LocalPlanner:
             rest[i] = rest[i + 1] + int(np.min(fields[starts[i + 1] + entry]))
         return fields, starts, rest, landmark_start, landmark_goal
 
+    def _crossing_costs(self, clearance):
+        """Least search cost, for each patch, from each of its gates to each
+        other: ``{(k, entry, exit): cost}`` over patch indices (the gate
+        distances of ``entry`` at the nodes next to ``exit``)."""
+        crossings = self._crossings.get(clearance)
+        if crossings is None:
+            fields, filled = self._fields(clearance)
+            crossings = {}
+            for k in range(self.index.pids.size):
+                neighbours = self.index.neighbours(k).tolist()
+                for entry in neighbours:
+                    start = self._distances_to_gate(fields, filled, k, entry, clearance) \
+                        - int(self.index.offsets[k])
+                    for leave in neighbours:
+                        if leave != entry:
+                            nodes = self.index.gate_nodes(self.index.pair(k, leave))
+                            crossings[k, entry, leave] = int(fields[start + nodes].min())
+            self._crossings[clearance] = crossings
+        return crossings
+
+    def cheapest_patches(self, start_patch, start_cell, goal_patch, goal_cell, clearance=0.0):
+        """The sequence of patches whose local search promises to cost least.
+
+        Each patch's share is the least cost between the gates it is
+        entered and left by (from the start cell, to the goal cell), as if
+        the crossing points could be chosen patch by patch, so the sum
+        bounds the search's cost from below; a Dijkstra search over the gates
+        minimises it.  Unlike the fewest gates, this weighs how far a path
+        goes inside each patch.
+
+        Parameters
+        ----------
+        start_patch, goal_patch : int
+            Patch ids.
+        start_cell, goal_cell : int
+            Flat cells of those patches.
+        clearance : float
+            As for :meth:`plan`.
+
+        Returns
+        -------
+        tuple of int or None
+            Distinct patch ids from the start's to the goal's (where the
+            cheapest bound comes back to a patch, the loop is cut out), or
+            None when the gates join none.
+        """
+        if start_patch == goal_patch:
+            return (int(start_patch),)
+        pids = self.index.pids
+        first, last = (int(k) for k in np.searchsorted(pids, [start_patch, goal_patch]))
+        source = self._node(first, start_cell, "start")
+        target = self._node(last, goal_cell, "goal")
+        fields, filled = self._fields(clearance)
+        crossings = self._crossing_costs(clearance)
+        offsets = self.index.offsets
+
+        def to_gate(k, other, node):
+            start = self._distances_to_gate(fields, filled, k, other, clearance)
+            return int(fields[start + node - offsets[k]])
+
+        # States are (patch, the patch it was entered from); the goal is (-1, -1).
+        queue = [(to_gate(first, other, source), other, first, ((first, -1),))
+                 for other in self.index.neighbours(first).tolist()]
+        heapq.heapify(queue)
+        done = set()
+        while queue:
+            cost, k, entry, trail = heapq.heappop(queue)
+            if k == -1:
+                return _without_loops([int(pids[p]) for p, _ in trail]) \
+                    if cost < UNREACHED else None
+            if (k, entry) in done or cost >= UNREACHED:
+                continue
+            done.add((k, entry))
+            trail = trail + ((k, entry),)
+            if k == last:
+                heapq.heappush(queue, (cost + to_gate(last, entry, target), -1, -1, trail))
+            for leave in self.index.neighbours(k).tolist():
+                if leave != entry and (leave, k) not in done:
+                    heapq.heappush(queue, (cost + crossings[k, entry, leave], leave, k, trail))
+        return None
+
     def cells_around(self, point, radius):
         """Cells within ``radius`` grid steps of a point along every axis.
 
@@ -198,9 +281,53 @@ class LocalPlanner:
         """:func:`~.index.patch_depth` of a patch [cells]."""
         return patch_depth(self.segmentation, pid)
 
+    def _layered_search(self, patches, start_cell, goal_cell, weight, clearance):
+        """Source, target, layers, guide and node costs of a search through
+        the patches of a global path."""
+        seg = self.segmentation
+        pids = self.index.pids
+        patches = [int(pid) for pid in patches]
+        index = np.searchsorted(pids, patches)
+        if (not patches or np.any(index >= pids.size)
+                or np.any(pids[np.minimum(index, pids.size - 1)] != patches)
+                or len(set(patches)) != len(patches)):
+            raise InvalidInputError(f"patches {patches} are not distinct patches of the roadmap")
+        for a, b in zip(patches, patches[1:]):
+            if (min(a, b), max(a, b)) not in seg.gates:
+                raise InvalidInputError(f"patches {a} and {b} share no gate")
+        source = self._node(index[0], start_cell, "start")
+        target = self._node(index[-1], goal_cell, "goal")
+        layer = np.full(pids.size, -1, dtype=np.int32)
+        layer[index] = np.arange(len(patches), dtype=np.int32)
+        index = index.tolist()
+        costed = [self._costs(weight, k) for k in index]
+        floor = min(f for _, f in costed)
+        guide = Guide(floor, *self._heuristic(index, target, clearance))
+        return source, target, layer, guide, costed[0][0]
+
+    def _free_search(self, patches, start_cell, goal_cell, weight):
+        """Source, target, layers, guide and node costs of a search from the
+        start cell of the first patch to the goal cell of the last one,
+        through every patch and gate."""
+        pids = self.index.pids
+        first, last = np.searchsorted(pids, [patches[0], patches[-1]]).tolist()
+        if max(first, last) >= pids.size or pids[first] != patches[0] \
+                or pids[last] != patches[-1]:
+            raise InvalidInputError(f"patches {list(patches)} are not patches of the roadmap")
+        source = self._node(first, start_cell, "start")
+        target = self._node(last, goal_cell, "goal")
+        costed = [self._costs(weight, k) for k in range(pids.size)]
+        floor = min(f for _, f in costed)
+        empty = np.zeros(0, dtype=np.int64)
+        # One layer: the estimate is the straight length to the goal.
+        guide = Guide(floor, empty, np.zeros(1, np.int64), np.zeros(1, np.int64), empty, empty)
+        return source, target, np.zeros(pids.size, dtype=np.int32), guide, costed[0][0]
+
     def plan(self, patches, start_cell, goal_cell, blocked=(), clearance=0.0,
-             clearance_weight=DEFAULT_CLEARANCE_WEIGHT, termination=NEVER):
-        """Best cell path from a start cell to a goal cell through given patches.
+             clearance_weight=DEFAULT_CLEARANCE_WEIGHT, termination=NEVER, any_gates=False,
+             most_settled=None):
+        """Best cell path from a start cell to a goal cell through given patches,
+        or through any.
 
         Parameters
         ----------
@@ -220,6 +347,15 @@ class LocalPlanner:
             paths.
         termination : Termination
             The search stops at its deadline.
+        any_gates : bool
+            Search every patch, crossing any gate any number of times, from
+            the start cell of the first of ``patches`` to the goal cell of
+            the last: the shortest path on the node graph, which may leave
+            a patch and come back, but with a weaker estimate to guide it.
+        most_settled : int, optional
+            The search stops after settling this many nodes, as at its
+            deadline: a budget of work that, unlike time, gives the same
+            answer on any machine and under any load.
 
         Returns
         -------
@@ -234,43 +370,46 @@ class LocalPlanner:
         InfeasiblePathError
             If no path exists (a patch's solutions are cut between its gates).
         PlanningTimeoutError
-            If the deadline passed first.
+            If the deadline passed, or the budget was spent, first.
         """
-        seg = self.segmentation
         pids = self.index.pids
         if not (math.isfinite(clearance_weight) and clearance_weight >= 0):
             raise InvalidInputError("clearance_weight must be finite and non-negative")
-        patches = [int(pid) for pid in patches]
-        index = np.searchsorted(pids, patches)
-        if (not patches or np.any(index >= pids.size)
-                or np.any(pids[np.minimum(index, pids.size - 1)] != patches)
-                or len(set(patches)) != len(patches)):
-            raise InvalidInputError(f"patches {patches} are not distinct patches of the roadmap")
-        for a, b in zip(patches, patches[1:]):
-            if (min(a, b), max(a, b)) not in seg.gates:
-                raise InvalidInputError(f"patches {a} and {b} share no gate")
-        source = self._node(index[0], start_cell, "start")
-        target = self._node(index[-1], goal_cell, "goal")
-        layer = np.full(pids.size, -1, dtype=np.int32)
-        layer[index] = np.arange(len(patches), dtype=np.int32)
-        blocked = np.array(sorted(blocked), dtype=np.int64)
         weight, clearance = float(clearance_weight), float(clearance)
-        index = index.tolist()
-        costed = [self._costs(weight, k) for k in index]
-        costs = costed[0][0]
-        floor = min(f for _, f in costed)
-        heuristic = self._heuristic(index, target, clearance)
+        blocked = np.array(sorted(blocked), dtype=np.int64)
+        if any_gates:
+            source, target, layer, guide, costs = self._free_search(
+                [int(pid) for pid in patches], start_cell, goal_cell, weight)
+        else:
+            source, target, layer, guide, costs = self._layered_search(
+                patches, start_cell, goal_cell, weight, clearance)
         graph = self.index.graph
         nodes, cost = layered_astar(
             graph, NodeCosts(costs, self.index.node_margin, clearance, LOW_MARGIN_FACTOR),
-            layer, source, target, blocked, Guide(floor, *heuristic), termination.deadline,
+            layer, source, target, blocked, guide,
+            Stop(termination.deadline, 2**62 if most_settled is None else int(most_settled)),
             self._work_arrays())
         if cost == TIMED_OUT:
-            raise PlanningTimeoutError(f"the time limit passed in the local search through "
-                                       f"patches {patches}")
+            where = f"the local search through patches {'any' if any_gates else patches}"
+            if termination():
+                raise PlanningTimeoutError(f"the time limit passed in {where}")
+            raise PlanningTimeoutError(f"{where} settled its budget of {most_settled} nodes")
         # Lengths in half quanta, node costs in units: back to length times cost.
         cost = float(cost) * self.index.quantum / 2 / (COST_UNITS if weight > 0 else 1)
         if nodes.size == 0:
-            raise InfeasiblePathError(f"no local path through patches {patches}")
+            raise InfeasiblePathError(f"no local path through patches "
+                                      f"{'any' if any_gates else patches}")
         return LocalPath(cells=graph.node_cell[nodes], patches=pids[graph.node_patch[nodes]],
                          slots=self.index.node_slot[nodes], cost=cost)
+
+
+def _without_loops(sequence):
+    """A sequence of patches with every stretch between two visits of one
+    patch cut out: consecutive patches stay joined by a gate."""
+    out = []
+    for patch in sequence:
+        if patch in out:
+            del out[out.index(patch) + 1:]
+        else:
+            out.append(patch)
+    return tuple(out)

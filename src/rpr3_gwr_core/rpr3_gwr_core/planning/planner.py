@@ -2,13 +2,28 @@
 smoothing, timing and validation, for one roadmap.
 
 A :class:`Planner` precomputes the lookups of its roadmap once; each
-:meth:`Planner.plan` call then answers one request.  The local planner's
-cell path runs from face to face, so it is first shortcut to straight
-segments inside each patch, which makes it close to the shortest path that
-keeps the requested clearance.  Every plan returned has passed
-:func:`~rpr3_gwr_core.validation.validate_path`; when the shortcut path fails
-it, the cell path is tried, then the next global path, and the plan is an
-error when none passes.
+:meth:`Planner.plan` call then answers one request.  Feasibility and the
+global paths reported come from the roadmap (fewest gates, as in the
+paper).  On a slice, the paper's setting, the path follows them in their
+order.  On a roadmap of all the joints, the path followed is searched in
+order of promise:
+
+1. the least-cost path on the whole node graph, free to cross any gate and
+   to come back to a patch, given a budget of work
+   (``Retries.promising_nodes``): on a full 3-DOF roadmap, whose few patches
+   are large and folded, the shortest way often leaves a patch and comes
+   back, which no sequence of distinct patches allows;
+2. the sequence of patches whose gates promise the cheapest search
+   (:meth:`~.local_planning.LocalPlanner.cheapest_patches`): fewest gates
+   can mean a long way round inside one patch;
+3. the global paths listed, then longer ones.
+
+The local planner's cell path runs from face to face, so it is shortcut to
+straight segments that cross its patches in the same order, which makes it
+close to the shortest path that keeps the requested clearance.  Every plan
+returned has passed :func:`~rpr3_gwr_core.validation.validate_path`; when
+the shortcut path fails it, the cell path is tried, then the next candidate,
+and the plan is an error when none passes.
 """
 
 from dataclasses import dataclass, field as dataclass_field
@@ -20,11 +35,11 @@ import numpy as np
 
 from ..exceptions import (GWRError, InfeasiblePathError, InvalidInputError, PlanningTimeoutError,
                           ValidationError)
-from .global_planning import RoadmapIndex, feasibility, global_paths, longer_paths
+from .global_planning import GlobalPath, RoadmapIndex, feasibility, global_paths, longer_paths
 from .index import PlanningIndex
 from .local_planning import DEFAULT_CLEARANCE_WEIGHT, LocalPlanner
 from .locate import DEFAULT_MODE_TOL, locate
-from .segments import segments_clear, shortcut_path
+from .segments import Sheets, segments_clear, shortcut_path
 from .termination import NEVER
 from .trajectory import corner_cuts, cut_corners, time_parameterize
 from .validation import DEFAULT_MAX_STEP, DEFAULT_MIN_MARGIN, validate_path
@@ -51,6 +66,12 @@ class Retries:
     global_paths : int
         Global paths tried, the listed ones first, before a plan fails: when
         every shortest path fails locally, longer ones may still pass.
+    promising_nodes : int
+        Nodes each local search may settle, on a roadmap of all the joints,
+        in the two most promising searches tried before the global paths
+        (:meth:`Planner.plan`); 0 tries the global paths only.  A budget of
+        work rather than time, so that a plan is the same on any machine
+        and under any load.
     repairs : int
         Local re-plans around a step the validator refused, per global path
         and clearance weight.
@@ -65,12 +86,13 @@ class Retries:
     """
 
     global_paths: int = 16
+    promising_nodes: int = 200_000
     repairs: int = 4
     split_shortcuts: int = 6
     detour_weight: float = 10.0
 
     def __post_init__(self):
-        for name in ("global_paths", "repairs", "split_shortcuts"):
+        for name in ("global_paths", "repairs", "split_shortcuts", "promising_nodes"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, numbers.Integral) \
                     or value < (1 if name == "global_paths" else 0):
@@ -251,8 +273,10 @@ class Planner:
         self.max_step = float(max_step)
         self._joints = roadmap.grid.joints()
         self._free = list(roadmap.grid.axis_joints)
-        self._step = roadmap.grid.step
-        self._lattice = roadmap.grid.lattice
+        seg, mechanism = roadmap.segmentation, roadmap.mechanism
+        self._sheets = Sheets(roadmap.grid.lattice, roadmap.grid.step, _SAMPLES_PER_CELL,
+                              seg.patch, seg.field.margin, seg.field.poses,
+                              np.where(mechanism.angular, mechanism.scale, 0.0))
 
     def warm_up(self):
         """Load every compiled kernel a plan can use (or, on a cold numba
@@ -327,7 +351,12 @@ class Planner:
                         joints=np.zeros((0, mechanism.n_joints)),
                         poses=np.zeros((0, mechanism.pose_size)))
         failures = []
-        for k, path in enumerate(self._attempts(paths, s.patch, g.patch)):
+        found = None
+        if not options.weighted and not self.roadmap.grid.fixed:
+            found = self._promising(s, g, options.clearance, termination)
+        for path in self._attempts(paths, s.patch, g.patch):
+            if found is not None:
+                break
             try:
                 if termination():
                     raise PlanningTimeoutError("the time limit passed")
@@ -343,22 +372,68 @@ class Planner:
             if not result.ok:
                 failures.append(f"path {list(path.patches)}: {result.reason}")
                 continue
-            smoothed = False
-            if options.smooth and len(joints) > 2 and not termination():
-                rounded = self._round(joints, patches, s, g, options.clearance,
-                                      min(result.min_margin,
-                                          self._kept_margin(s, g, options.clearance)))
-                if rounded is not None:
-                    result, joints, patches = rounded
-                    smoothed = True
-            timing = (None, None, None)
-            if options.max_velocity is not None:
-                timing = time_parameterize(joints, options.max_velocity, options.max_acceleration)
-            return Plan(True, answer.reason, s, g, paths, path_index=k, joints=joints,
-                        poses=result.poses, patches=patches, times=timing[0],
-                        velocities=timing[1], accelerations=timing[2], validation=result,
-                        smoothed=smoothed)
-        raise ValidationError("no global path gave a valid trajectory: " + "; ".join(failures))
+            found = path, result, joints, patches
+        if found is None:
+            raise ValidationError("no global path gave a valid trajectory: "
+                                  + "; ".join(failures))
+        path, result, joints, patches = found
+        if path.patches not in {p.patches for p in paths}:
+            paths.append(path)
+        path_index = next(k for k, p in enumerate(paths) if p.patches == path.patches)
+        smoothed = False
+        if options.smooth and len(joints) > 2 and not termination():
+            rounded = self._round(joints, patches, s, g, options.clearance,
+                                  min(result.min_margin,
+                                      self._kept_margin(s, g, options.clearance)))
+            if rounded is not None:
+                result, joints, patches = rounded
+                smoothed = True
+        timing = (None, None, None)
+        if options.max_velocity is not None:
+            timing = time_parameterize(joints, options.max_velocity, options.max_acceleration)
+        return Plan(True, answer.reason, s, g, paths, path_index=path_index, joints=joints,
+                    poses=result.poses, patches=patches, times=timing[0],
+                    velocities=timing[1], accelerations=timing[2], validation=result,
+                    smoothed=smoothed)
+
+    def _promising(self, s, g, clearance, termination):
+        """The first path of the two most promising searches that validates,
+        each local search given ``retries.promising_nodes``: the least-cost path on the
+        node graph, crossing any gates (:meth:`~.local_planning.LocalPlanner.plan`
+        with ``any_gates``), then the path through the cheapest patches
+        (:meth:`~.local_planning.LocalPlanner.cheapest_patches`).
+
+        The first search's estimate is only the straight length to the
+        goal, so it takes long where the shortest path goes far around; the
+        second's patches can be narrow where repairs take long; either way
+        the global paths then take over.
+
+        Returns
+        -------
+        (GlobalPath, Validation, ndarray, ndarray) or None
+            The patches the path crosses, in order (a patch may come back),
+            its validation, legs and waypoint patches.
+        """
+        budget = self.retries.promising_nodes
+        if budget == 0:
+            return None
+        try:
+            result, joints, patches, route = self._repaired_path(
+                None, s, g, clearance, self.clearance_weight, termination, budget)
+        except (InfeasiblePathError, PlanningTimeoutError):
+            result = None
+        if result is None or not result.ok:
+            route = self.local.cheapest_patches(s.patch, s.cell, g.patch, g.cell, clearance)
+            if route is None:
+                return None
+            try:
+                result, joints, patches = self._validated_path(
+                    GlobalPath(route, 0.0), s, g, clearance, termination, budget)
+            except (InfeasiblePathError, PlanningTimeoutError):
+                return None
+            if not result.ok:
+                return None
+        return GlobalPath(route, self.global_index.path_cost(route)), result, joints, patches
 
     def _weights(self):
         """The clearance weights a global path's local path is tried with."""
@@ -377,20 +452,21 @@ class Planner:
             paths.append(path)
             yield path
 
-    def _validated_path(self, path, s, g, clearance, termination):
+    def _validated_path(self, path, s, g, clearance, termination, most_settled=None):
         """Local path along a global path that passes the validator, shortcut
         where the shortcut path passes too; when every repair of the
         shortest path fails, the same for the path the paper's clearance
         weight keeps in the middle of its patches."""
         for weight in self._weights():
-            result, joints, patches = self._repaired_path(path, s, g, clearance, weight,
-                                                          termination)
+            result, joints, patches, _ = self._repaired_path(path, s, g, clearance, weight,
+                                                             termination, most_settled)
             if result.ok:
                 break
         return result, joints, patches
 
-    def _repaired_path(self, path, s, g, clearance, weight, termination):
-        """Local path along a global path, repaired where the validator refuses it.
+    def _repaired_path(self, path, s, g, clearance, weight, termination, most_settled=None):
+        """Local path along a global path (through any gates when None),
+        repaired where the validator refuses it.
 
         The path's cells keep the clearance where they can, but between two
         cell centres next to a cusp point, or over a singular sliver thinner
@@ -400,6 +476,9 @@ class Planner:
         around the step where it dipped are blocked, in a box growing with
         each repair, and the local path planned again, a few times, before a
         path that keeps ``min_margin`` will do.
+
+        Returns the validation, the legs and patches of the waypoints, and
+        the patches the cell path crosses, in order.
         """
         keep = self._kept_margin(s, g, clearance)
         blocked = set()
@@ -409,8 +488,9 @@ class Planner:
             if termination():
                 raise PlanningTimeoutError("the time limit passed")
             try:
-                local = self.local.plan(path.patches, s.cell, g.cell, blocked, clearance, weight,
-                                        termination)
+                local = self.local.plan((s.patch, g.patch) if path is None else path.patches,
+                                        s.cell, g.cell, blocked, clearance, weight, termination,
+                                        any_gates=path is None, most_settled=most_settled)
             except InfeasiblePathError:
                 if not blocked:
                     raise
@@ -419,7 +499,7 @@ class Planner:
             tried.append((joints, patches))
             result, kept = self._shortcut_validated(joints, patches, s, g, clearance, keep)
             if result.ok:
-                return result, joints[kept], patches[kept]
+                return result, joints[kept], patches[kept], _crossed(patches)
             k = self._failed_segment(result, joints[kept], patches[kept])
             if k < 1:
                 break
@@ -433,7 +513,7 @@ class Planner:
             result = self._validate(joints, s, g, self.min_margin)
             if result.ok:
                 break
-        return result, joints, patches
+        return result, joints, patches, _crossed(patches)
 
     def _shortcut_validated(self, joints, patches, s, g, clearance, keep):
         """The shortcut path's validation and kept waypoints; a shortcut the
@@ -536,24 +616,20 @@ class Planner:
         -------
         ndarray of bool, shape (len(starts),)
         """
-        seg = self.roadmap.segmentation
         return segments_clear(
             np.ascontiguousarray(np.asarray(starts)[:, self._free]),
             np.ascontiguousarray(np.asarray(ends)[:, self._free]),
-            np.asarray(patches, dtype=np.int64), np.asarray(floors, dtype=float),
-            _SAMPLES_PER_CELL, self._step, self._lattice, seg.patch, seg.field.margin)
+            np.asarray(patches, dtype=np.int64), np.asarray(floors, dtype=float), self._sheets)
 
     def _shortcut(self, joints, patches, margins, clearance, split=False):
-        """Indices of the waypoints kept when each patch's stretch is shortcut
-        by straight segments (:func:`~.segments.shortcut_path`; gate crossings
-        stay in place); with ``split``, the jump from the first waypoint
+        """Indices of the waypoints kept when the path is shortcut by straight
+        segments crossing its patches in order (:func:`~.segments.shortcut_path`);
+        with ``split``, the jump from the first waypoint
         straight to the last is not allowed.  ``margins`` are the waypoints'
         (:meth:`_waypoint_margins`)."""
-        seg = self.roadmap.segmentation
         return shortcut_path(np.ascontiguousarray(joints[:, self._free]),
                              np.asarray(patches, dtype=np.int64), margins, clearance, split,
-                             _SAMPLES_PER_CELL, self._step, self._lattice, seg.patch,
-                             seg.field.margin)
+                             self._sheets)
 
     def _round(self, joints, patches, s, g, clearance, keep):
         """The path with its corners cut (Chaikin) where the cut keeps to the
@@ -584,6 +660,12 @@ class Planner:
             k = max(result.failed_segment, 1)
             corners[origin[k - 1]:origin[min(k, len(origin) - 1)] + 1] = False
         return None
+
+
+def _crossed(patches):
+    """The patches a waypoint path crosses, in order, as a tuple of ids."""
+    patches = np.asarray(patches)
+    return tuple(int(p) for p in patches[np.concatenate([[True], patches[1:] != patches[:-1]])])
 
 
 def _turns(points):

@@ -1,19 +1,51 @@
-"""Whether straight joint segments stay on a patch, keeping a margin: the
-test behind the planner's shortcuts and corner cuts, and the greedy
-shortcutting that asks it, compiled because a plan asks it for hundreds of
-segments."""
+"""Whether straight joint segments stay on a patch, or cross given patches in
+order, keeping a margin: the test behind the planner's shortcuts and corner
+cuts, and the greedy shortcutting that asks it, compiled because a plan
+asks it for hundreds of segments."""
+
+from typing import NamedTuple
 
 import numba
 import numpy as np
 
 from ..workspace.grid import lattice_cell
 
-__all__ = ["segments_clear", "shortcut_path"]
+__all__ = ["Sheets", "segments_clear", "shortcut_path"]
+
+
+class Sheets(NamedTuple):
+    """The roadmap's solution sheets as the segment tests read them.
+
+    Attributes
+    ----------
+    lattice : tuple
+        The grid's :attr:`~rpr3_gwr_core.workspace.grid.GridBase.lattice`.
+    step : float
+        The grid's smallest step [joint unit].
+    samples_per_step : int
+        Samples per grid step of a segment's longest axis change (2 at least).
+    patch_of : ndarray of int, shape (n_cells, max_solutions)
+        Patch of each solution (the segmentation's ``patch``).
+    margin : ndarray, shape (n_cells, max_solutions)
+        Signed margin of each solution (the field's).
+    poses : ndarray, shape (n_cells, max_solutions, pose_size)
+        Pose of each solution (the field's).
+    angle_scale : ndarray, shape (pose_size,)
+        For each pose coordinate, 0 when it is a length, else the
+        mechanism's scale: angles are compared modulo 2 pi, as arc lengths.
+    """
+
+    lattice: tuple
+    step: float
+    samples_per_step: int
+    patch_of: np.ndarray
+    margin: np.ndarray
+    poses: np.ndarray
+    angle_scale: np.ndarray
 
 
 @numba.njit(cache=True, nogil=True)
-def segments_clear(starts, ends, patches, floors, samples_per_step, step, lattice, patch_of,
-                   margin):
+def segments_clear(starts, ends, patches, floors, sheets):
     """Sample each segment and check its points' cells.
 
     Parameters
@@ -24,16 +56,7 @@ def segments_clear(starts, ends, patches, floors, samples_per_step, step, lattic
         The patch each segment must stay on.
     floors : ndarray, shape (m,)
         The margin magnitude each segment must keep.
-    samples_per_step : int
-        Samples per grid step of a segment's longest axis change (2 at least).
-    step : float
-        The grid's smallest step [joint unit].
-    lattice : tuple
-        The grid's :attr:`~rpr3_gwr_core.workspace.grid.GridBase.lattice`.
-    patch_of : ndarray of int, shape (n_cells, max_solutions)
-        Patch of each solution (the segmentation's ``patch``).
-    margin : ndarray, shape (n_cells, max_solutions)
-        Signed margin of each solution (the field's).
+    sheets : Sheets
 
     Returns
     -------
@@ -43,24 +66,26 @@ def segments_clear(starts, ends, patches, floors, samples_per_step, step, lattic
     """
     out = np.empty(starts.shape[0], dtype=np.bool_)
     point = np.empty(starts.shape[1])
+    route = np.empty(1, np.int64)
     for s in range(starts.shape[0]):
-        out[s] = _clear(starts[s], ends[s], patches[s], floors[s], samples_per_step, step,
-                        lattice, patch_of, margin, point)
+        route[0] = patches[s]
+        out[s] = _clear_through(starts[s], ends[s], route, floors[s], sheets, point)
     return out
 
 
 @numba.njit(cache=True, nogil=True)
-def shortcut_path(points, patches, margins, clearance, split, samples_per_step, step, lattice,
-                  patch_of, margin, max_passes=3):
+def shortcut_path(points, patches, margins, clearance, split, sheets, max_passes=3):
     """Greedy shortcutting of a waypoint path by straight segments that pass
     :func:`segments_clear`.
 
     From each kept waypoint, the longest jump is tried first, then halved
     ones (O(log n) tests per waypoint), for up to ``max_passes`` passes
-    over the kept waypoints.  A jump from waypoint i must stay within i's
-    run of waypoints on one patch (gate crossings stay in place) and keep
-    ``min(clearance, the least positive margin of the waypoints it
-    replaces)``: no less than the cell path kept there.
+    over the kept waypoints.  A jump must cross the patches of the
+    waypoints it replaces in their order, each where it likes (it may cut
+    across a gate elsewhere than the cell path did, since the sheet goes on
+    across the whole gate), and keep ``min(clearance, the least positive
+    margin of the waypoints it replaces)``: no less than the cell path kept
+    there.
 
     Parameters
     ----------
@@ -74,8 +99,7 @@ def shortcut_path(points, patches, margins, clearance, split, samples_per_step, 
     split : bool
         Whether the jump from the first waypoint straight to the last is
         refused (a repair of that very jump).
-    samples_per_step, step, lattice, patch_of, margin :
-        As for :func:`segments_clear`.
+    sheets : Sheets
 
     Returns
     -------
@@ -83,10 +107,6 @@ def shortcut_path(points, patches, margins, clearance, split, samples_per_step, 
         Indices of the kept waypoints, first and last included.
     """
     n = points.shape[0]
-    run_end = np.empty(n, np.int64)
-    run_end[n - 1] = n - 1
-    for i in range(n - 2, -1, -1):
-        run_end[i] = run_end[i + 1] if patches[i] == patches[i + 1] else i
     lowest = np.empty(n)
     point = np.empty(points.shape[1])
     keep = np.arange(n)
@@ -103,16 +123,15 @@ def shortcut_path(points, patches, margins, clearance, split, samples_per_step, 
             jump = kept - 1 - i
             # Least positive margin from waypoint a up to each later one.
             least = np.inf
-            for j in range(a, min(keep[i + jump], run_end[a]) + 1):
+            for j in range(a, keep[i + jump] + 1):
                 if margins[j] > 0:
                     least = min(least, margins[j])
                 lowest[j] = least
             while jump > 1:
                 b = keep[i + jump]
-                if (b <= run_end[a] and not (split and a == 0 and b == n - 1)
-                        and _clear(points[a], points[b], patches[a],
-                                   min(clearance, lowest[b]), samples_per_step, step, lattice,
-                                   patch_of, margin, point)):
+                if (not (split and a == 0 and b == n - 1)
+                        and _clear_through(points[a], points[b], patches[a:b + 1],
+                                           min(clearance, lowest[b]), sheets, point)):
                     reach = jump
                     changed = True
                     break
@@ -128,24 +147,70 @@ def shortcut_path(points, patches, margins, clearance, split, samples_per_step, 
 
 
 @numba.njit(cache=True)
-def _clear(a, b, patch, floor, samples_per_step, step, lattice, patch_of, margin, point):
-    """Whether the segment from ``a`` to ``b`` passes (:func:`segments_clear`);
-    ``point`` is work space."""
-    low, steps, shape, index, base_steps, refinement, periods = lattice
-    span = np.max(np.abs(b - a)) / step
-    count = max(2, int(span * samples_per_step) + 1)
+def _clear_through(a, b, route, floor, sheets, point):
+    """Whether the segment from ``a`` to ``b`` keeps to the patches of
+    ``route`` (the waypoints' patches, repeats allowed), entering them in
+    order, each sample on the current one or on the next, with a margin
+    magnitude of at least ``floor``; ``point`` is work space.
+
+    A patch may border the next across several gates, and a cell of the
+    next patch's region may hold the next patch's solution and others: a
+    step onto the next patch counts only where its solution is the one
+    nearest the current patch's solution at the previous sample, the sheet
+    the platform goes on along."""
+    low, steps, shape, index, base_steps, refinement, periods = sheets.lattice
+    span = np.max(np.abs(b - a)) / sheets.step
+    count = max(2, int(span * sheets.samples_per_step) + 1)
+    at = 0
+    previous, previous_slot = -1, -1
     for n in range(count):
         t = n / (count - 1)
         point[:] = a * (1 - t) + b * t
         cell = lattice_cell(point, low, steps, shape, index, base_steps, refinement, periods)
-        if cell < 0 or not _keeps(patch_of[cell], margin[cell], patch, floor):
+        if cell < 0:
+            return False
+        slot = _slot(sheets, cell, route[at], floor)
+        if slot < 0:
+            following = at
+            while following < route.size and route[following] == route[at]:
+                following += 1
+            if following == route.size or previous < 0:
+                return False
+            slot = _slot(sheets, cell, route[following], floor)
+            if slot < 0 or _nearest(sheets, cell, sheets.poses[previous, previous_slot]) != slot:
+                return False
+            at = following
+        previous, previous_slot = cell, slot
+    for k in range(at, route.size):
+        if route[k] != route[at]:
             return False
     return True
 
 
 @numba.njit(cache=True)
-def _keeps(cell_patches, cell_margins, patch, floor):
+def _slot(sheets, cell, patch, floor):
+    """Slot of the patch's solution in a cell if its margin magnitude is at
+    least ``floor``, else -1."""
+    cell_patches = sheets.patch_of[cell]
     for slot in range(cell_patches.size):
         if cell_patches[slot] == patch:
-            return abs(cell_margins[slot]) >= floor
-    return False
+            return slot if abs(sheets.margin[cell, slot]) >= floor else -1
+    return -1
+
+
+@numba.njit(cache=True)
+def _nearest(sheets, cell, pose):
+    """Slot of the cell's solution nearest to a pose (angles as arcs)."""
+    best, nearest = np.inf, -1
+    for slot in range(sheets.patch_of.shape[1]):
+        if np.isnan(sheets.poses[cell, slot, 0]):
+            continue  # past the cell's solutions
+        distance = 0.0
+        for k in range(pose.size):
+            d = sheets.poses[cell, slot, k] - pose[k]
+            if sheets.angle_scale[k] > 0:
+                d = (np.pi - np.remainder(np.pi - d, 2 * np.pi)) * sheets.angle_scale[k]
+            distance += d * d
+        if distance < best:
+            best, nearest = distance, slot
+    return nearest

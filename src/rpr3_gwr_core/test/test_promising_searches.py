@@ -1,0 +1,120 @@
+"""The searches a plan on a roadmap of all the joints tries before the global
+paths: the least-cost path across any gates, checked against scipy's
+Dijkstra on the same node graph, and the sequence of patches whose gates
+promise the cheapest search."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import dijkstra
+
+from rpr3_gwr_core import PAPER_GEOMETRY
+from rpr3_gwr_core.exceptions import InvalidInputError, PlanningTimeoutError
+from rpr3_gwr_core.paper import rho1_slice
+from rpr3_gwr_core.planning import Planner
+from rpr3_gwr_core.planning.index import LOW_MARGIN_FACTOR
+from rpr3_gwr_core.planning.planner import Retries
+from rpr3_gwr_core.workspace.roadmap import build_roadmap
+
+from pose_reference import assert_executable, legs_of
+
+D = math.radians
+# The paper's first example, an assembly-mode change and a short hop.
+PAIRS = [((17, 12, 18, D(122.82)), (17, 10, 25, D(-24.24))),
+         ((17, 20, 25, D(29.47)), (17, 20, 25, D(96.13))),
+         ((17, 20, 25, D(29.47)), (17, 22, 24, D(38.44)))]
+
+
+@pytest.fixture(scope="module")
+def planner():
+    return Planner(build_roadmap(PAPER_GEOMETRY, rho1_slice(rho1=17, step=0.25)))
+
+
+def _graph_distances(planner, source, clearance):
+    """Least costs from a node over the whole node graph, by scipy: an edge
+    costs its length times the sum of its ends' costs (1, or
+    LOW_MARGIN_FACTOR below the clearance), as the searches count."""
+    index = planner.planning_index
+    graph = index.graph
+    cost = np.where(index.node_margin < clearance, LOW_MARGIN_FACTOR, 1)
+    tails = np.repeat(np.arange(index.n_nodes), np.diff(graph.indptr))
+    weights = graph.quanta * (cost[tails] + cost[graph.indices]).astype(float)
+    matrix = csr_matrix((weights, graph.indices, graph.indptr),
+                        shape=(index.n_nodes, index.n_nodes))
+    return dijkstra(matrix, indices=source)
+
+
+@pytest.mark.parametrize("clearance", [0.0, 0.02])
+@pytest.mark.parametrize("pair", range(len(PAIRS)))
+def test_the_search_across_any_gates_finds_the_least_cost_path(planner, pair, clearance):
+    s, g = (planner.locate(c) for c in PAIRS[pair])
+    path = planner.local.plan((s.patch, g.patch), s.cell, g.cell, clearance=clearance,
+                              any_gates=True)
+    index = planner.planning_index
+    source = planner.local._node(int(np.searchsorted(index.pids, s.patch)), s.cell, "start")
+    target = planner.local._node(int(np.searchsorted(index.pids, g.patch)), g.cell, "goal")
+    expected = _graph_distances(planner, source, clearance)[target] * index.quantum / 2
+    assert path.cost == pytest.approx(expected, rel=1e-12)
+    assert path.cells[0] == s.cell and path.cells[-1] == g.cell
+    # No sequence of patches does better.
+    for global_path in planner.plan(*PAIRS[pair]).global_paths:
+        layered = planner.local.plan(global_path.patches, s.cell, g.cell, clearance=clearance)
+        assert path.cost <= layered.cost + 1e-9
+
+
+@pytest.mark.parametrize("pair", range(len(PAIRS)))
+def test_the_cheapest_patches_are_a_chain_of_gates_from_start_to_goal(planner, pair):
+    s, g = (planner.locate(c) for c in PAIRS[pair])
+    chain = planner.local.cheapest_patches(s.patch, s.cell, g.patch, g.cell, 0.02)
+    gates = planner.roadmap.segmentation.gates
+    assert chain[0] == s.patch and chain[-1] == g.patch
+    assert len(set(chain)) == len(chain)
+    assert all((min(a, b), max(a, b)) in gates for a, b in zip(chain, chain[1:]))
+    # A local search through them exists.
+    planner.local.plan(chain, s.cell, g.cell, clearance=0.02)
+
+
+def test_a_search_stops_at_its_budget_of_nodes(planner):
+    s, g = (planner.locate(c) for c in PAIRS[0])
+    with pytest.raises(PlanningTimeoutError, match="budget of 50 nodes"):
+        planner.local.plan((s.patch, g.patch), s.cell, g.cell, any_gates=True, most_settled=50)
+
+
+@pytest.mark.parametrize("value", [-1, 1.5, True])
+def test_a_budget_must_be_a_whole_number(value):
+    with pytest.raises(InvalidInputError):
+        Retries(promising_nodes=value)
+
+
+# Drawn in pose space by bench_engine.py (seed 1): the global path with
+# fewest gates leads 101 length units round; the shortest path the
+# benchmark's pose lattice found, re-checked by continuation, is 17.19.
+FAR_ROUND = ((41.075377, 49.683449, 48.140368, 0.969858),
+             (38.945574, 48.891499, 49.587255, 0.673552))
+
+
+@pytest.fixture(scope="module")
+def full_planner(full_roadmap):
+    return Planner(full_roadmap)
+
+
+def test_on_all_the_joints_the_plan_goes_the_short_way(full_planner):
+    start, goal = FAR_ROUND
+    plan = full_planner.plan(start, goal)
+    length = float(np.linalg.norm(np.diff(plan.joints, axis=0), axis=1).sum())
+    assert length < 1.1 * 17.19
+    goal_pose = plan.poses[-1]
+    np.testing.assert_allclose(legs_of(goal_pose), goal[:3], atol=1e-7)
+    assert abs(goal_pose[2] - goal[3]) < D(1)
+    assert_executable(plan, goal_pose, full_planner.min_margin)
+    # The global path with fewest gates is still what the roadmap reports first.
+    assert len(plan.global_paths[0].patches) <= len(plan.global_paths[plan.path_index].patches)
+
+
+def test_without_a_budget_the_plan_follows_the_global_paths(full_planner):
+    start, goal = FAR_ROUND
+    plan = Planner(full_planner.roadmap, full_planner.planning_index,
+                   retries=Retries(promising_nodes=0)).plan(start, goal)
+    assert plan.path_index == 0
