@@ -3,6 +3,7 @@
 Run on demand, after ``source ros2_ws/env.sh``:
 
     python bench/bench_mechanisms.py [--cells 401] [--pairs 200] [--repeat 3] [--seed 1]
+                                     [--full-refinement 4] [--no-full]
 
 For each mechanism file in ``config/`` (a slice of ``--cells`` x ``--cells``
 cells: the paper's 3-RPR at rho1 = 17, the five-bar over its whole torus,
@@ -13,14 +14,22 @@ over ``--repeat`` builds, as a fraction of the eigenvalue baseline of
 and plans between random same-aspect pairs of cell solutions with margin at
 least 0.05 (p50 / p95 / max; target p50 <= 5 ms), with the reasons of the
 pairs refused (``unreachable``: the roadmap joins the pair's patches by no
-chain of gates).  Prints one JSON line per measurement.
+chain of gates).  Then the 3-RRR's full roadmap over its torus (all three
+joints turning, ``config/three_rrr.yaml``'s 120 cells a turn as the fine
+lattice of an adaptive grid refined ``--full-refinement`` times), built
+once in a fresh process: its wall and CPU time, the time of its planning
+index, its peak resident memory (``ru_maxrss`` of the child), cells,
+regions, patches and gates (the issue's budget: 60 s and 2 GB).  Prints one
+JSON line per measurement.
 """
 
 import argparse
 import json
 import math
 import pathlib
+import resource
 import statistics
+import subprocess
 import sys
 import time
 
@@ -37,6 +46,31 @@ CONFIG = pathlib.Path(__file__).resolve().parents[1] / "config"
 # The file and the joint it fixes for the slice.
 SLICES = {"paper_3rpr.yaml": {"rho1": 17.0}, "five_bar.yaml": {},
           "three_rrr.yaml": {"th1": 0.0}, "three_prr.yaml": {"s1": 5.0}}
+
+# The full 3-RRR roadmap, in a process of its own so that its peak memory
+# is its own; prints one JSON object.
+_FULL_BUILD = """
+import json, math, sys, time
+from rpr3_gwr_core import build_roadmap
+from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
+from rpr3_gwr_core.planning import planning_index
+from rpr3_gwr_core.workspace.adaptive import coarse_base, refine
+described = load_mechanism_file(sys.argv[1])
+refinement = int(sys.argv[2])
+wall, cpu = time.perf_counter(), time.process_time()
+grid = refine(described.mechanism, coarse_base(described.grid(), refinement), refinement)
+roadmap = build_roadmap(described.mechanism, grid)
+wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+index = time.perf_counter()
+planning_index(roadmap)
+seg = roadmap.segmentation
+print(json.dumps({"build_s": round(wall, 2), "build_cpu_s": round(cpu, 2),
+                  "planning_index_s": round(time.perf_counter() - index, 2),
+                  "cells": grid.size, "refined_blocks": int(grid.blocks.size),
+                  "blocks": math.prod(grid.block_shape),
+                  "regions": seg.n_regions, "patches": len(seg.patches),
+                  "gates": len(seg.gates)}))
+"""
 
 
 def _resampled(grid, cells):
@@ -76,6 +110,9 @@ def main():
     parser.add_argument("--pairs", type=int, default=200)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--full-refinement", type=int, default=4)
+    parser.add_argument("--no-full", action="store_true",
+                        help="skip the 3-RRR's full roadmap over its torus")
     args = parser.parse_args()
     baseline = eigenvalue_baseline(args.repeat)
     print(json.dumps({"baseline_s": round(baseline, 3)}), flush=True)
@@ -111,6 +148,17 @@ def main():
             "refused": failures, "plan_p50_ms": round(float(np.median(ms)), 2),
             "plan_p95_ms": round(float(np.percentile(ms, 95)), 2),
             "plan_max_ms": round(float(ms.max()), 2)}), flush=True)
+    if not args.no_full:
+        # Compiled kernels are loaded from numba's cache by the first slice builds.
+        out = subprocess.run([sys.executable, "-c", _FULL_BUILD, str(CONFIG / "three_rrr.yaml"),
+                              str(args.full_refinement)], capture_output=True, text=True,
+                             check=True).stdout
+        row = json.loads(out)
+        peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+        print(json.dumps({"mechanism": "3-RRR", "file": "three_rrr.yaml", "full": True,
+                          "refinement": args.full_refinement, **row,
+                          "build_over_baseline": round(row["build_s"] / baseline, 2),
+                          "peak_rss_mb": round(peak / 1024, 1)}), flush=True)
 
 
 if __name__ == "__main__":

@@ -186,8 +186,15 @@ class ThreePRR(_MovingBaseRPR):
     _compiled_step = staticmethod(_compiled_step)
     _step_kernel = staticmethod(_step_kernel)
 
-    def _rates(self, rows, joints):
-        return _slider_rates(rows, self.parameters)
+    def _directions(self, base):
+        # Each slider moves its joint along its own direction.
+        return np.broadcast_to(self._slider_directions.reshape((6,) + (1,) * np.ndim(base[0])),
+                               (6,) + np.shape(base[0]))
+
+    @functools.cached_property
+    def _slider_directions(self):
+        return np.array([f(g) for g in (self.gamma1, self.gamma2, self.gamma3)
+                         for f in (math.cos, math.sin)])
 
     def _change(self, joints_from, joints_to):
         return joints_to - joints_from

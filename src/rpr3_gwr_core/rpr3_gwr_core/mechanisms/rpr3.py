@@ -273,6 +273,25 @@ class ThreeRPR(Mechanism):
         """
         return _passive_angles(_as_pose(poses), self)
 
+    def platform_points(self, poses):
+        """Platform joints ``B1..B3`` of poses ``(..., 3)``, shape (..., 3, 2) [length unit]."""
+        legs, _ = _leg_vectors(_as_pose(poses), self)
+        return legs + self.base
+
+    def body_outline(self, poses, joints):
+        """Legs ``A_i B_i`` (prismatic), the platform triangle, and the
+        passive angles: ``base{i}`` the leg's direction theta_i, ``platform{i}``
+        it relative to the platform, ``theta_i - alpha`` (:meth:`Mechanism.body_outline`)."""
+        points = self.platform_points(poses)
+        base = np.broadcast_to(self.base, points.shape)
+        theta = np.arctan2(points[..., 1] - base[..., 1], points[..., 0] - base[..., 0])
+        relative = wrap_angle(theta - np.asarray(poses)[..., 2:3])
+        links = [(f"leg{i + 1}", i, (f"A{i + 1}", f"B{i + 1}"), base[..., i, :],
+                  points[..., i, :], True) for i in range(3)]
+        passive = ([(f"base{i + 1}", theta[..., i]) for i in range(3)]
+                   + [(f"platform{i + 1}", relative[..., i]) for i in range(3)])
+        return links, [("platform", ("B1", "B2", "B3"), points)], passive
+
     def parallel_jacobian(self, poses):
         """The parallel Jacobian ``Jx = dF/d(x, y, alpha)``.
 
@@ -757,12 +776,6 @@ def _basis_coefficients(geometry):
     Returns an array (7, 7): row j is basis function j, columns are
     ``(a0, a1, b1, a2, b2, a3, b3)`` of ``a0 + sum a_k cos k alpha + b_k sin k alpha``.
     """
-    return _fourier_basis(geometry)
-
-
-def _fourier_basis(geometry):
-    """:func:`_basis_coefficients` uncached; with per-row base points
-    (:class:`_BasePerRow` of column arrays) it is an array (n, 7, 7)."""
     n = 16
     alpha = 2 * np.pi * np.arange(n) / n
     big_a, big_b, big_c, big_d, big_e, big_f = _linear_terms(alpha, geometry)
@@ -784,6 +797,67 @@ def _fourier_basis(geometry):
     coeffs[..., 1::2] = 2 * spectrum[..., 1:4].real
     coeffs[..., 2::2] = -2 * spectrum[..., 1:4].imag
     return coeffs
+
+
+# Equation (7) with base points per row is sampled at _ROW_SAMPLES
+# orientations in one compiled pass: a trigonometric cubic (its degree-4
+# harmonics cancel, and would alias only into the harmonic 4 dropped) is
+# fixed by 8 samples, and no basis is built per row.
+_ROW_SAMPLES = 8
+
+
+@numba.njit(cache=True, nogil=True)
+def _moving_base_coefficients(bases, rho, platform):
+    """Equation (7)'s Fourier coefficients for base points per row: the
+    terms of :func:`_linear_terms` combined as :func:`_basis_coefficients`
+    and :func:`_equation7_coefficients` combine them.
+
+    ``bases`` has shape (n, 3, 2) [length unit], ``rho`` (n, 3) [length
+    unit], ``platform`` is ``(d1, d3, beta)``; returns shape (n, 7),
+    ``(a0, a1, b1, a2, b2, a3, b3)``.
+    """
+    d1, d3, beta = platform
+    n = _ROW_SAMPLES
+    cos1, sin1 = np.empty(n), np.empty(n)
+    cos3, sin3 = np.empty(n), np.empty(n)
+    # The discrete Fourier transform onto (a0, a1, b1, ..., b3).
+    transform = np.empty((n, 7))
+    for j in range(n):
+        alpha = 2 * math.pi * j / n
+        cos1[j], sin1[j] = math.cos(alpha), math.sin(alpha)
+        cos3[j], sin3[j] = math.cos(alpha + beta), math.sin(alpha + beta)
+        transform[j, 0] = 1.0 / n
+        for k in range(1, 4):
+            transform[j, 2 * k - 1] = 2.0 / n * math.cos(k * alpha)
+            transform[j, 2 * k] = 2.0 / n * math.sin(k * alpha)
+    out = np.zeros((bases.shape[0], 7))
+    for r in range(bases.shape[0]):
+        # Leg 1 at the origin, as in _linear_terms.
+        a2x, a2y = bases[r, 1, 0] - bases[r, 0, 0], bases[r, 1, 1] - bases[r, 0, 1]
+        a3x, a3y = bases[r, 2, 0] - bases[r, 0, 0], bases[r, 2, 1] - bases[r, 0, 1]
+        far2 = d1 * d1 + a2x * a2x + a2y * a2y
+        far3 = d3 * d3 + a3x * a3x + a3y * a3y
+        u = rho[r, 1] ** 2 - rho[r, 0] ** 2
+        v = rho[r, 2] ** 2 - rho[r, 0] ** 2
+        w = rho[r, 0] ** 2
+        for j in range(n):
+            big_a = -2 * a2x + 2 * d1 * cos1[j]
+            big_b = -2 * a2y + 2 * d1 * sin1[j]
+            big_c = far2 - 2 * d1 * (a2x * cos1[j] + a2y * sin1[j])
+            big_d = -2 * a3x + 2 * d3 * cos3[j]
+            big_e = -2 * a3y + 2 * d3 * sin3[j]
+            big_f = far3 - 2 * d3 * (a3x * cos3[j] + a3y * sin3[j])
+            k1 = big_b * big_f - big_e * big_c
+            k2 = big_d * big_c - big_a * big_f
+            delta = big_a * big_e - big_b * big_d
+            value = (u * u * (big_e * big_e + big_d * big_d)
+                     - 2 * u * v * (big_e * big_b + big_d * big_a)
+                     + v * v * (big_a * big_a + big_b * big_b)
+                     + 2 * u * (big_e * k1 - big_d * k2) + 2 * v * (big_a * k2 - big_b * k1)
+                     + k1 * k1 + k2 * k2 - w * delta * delta)
+            for m in range(7):
+                out[r, m] += value * transform[j, m]
+    return out
 
 
 def _tan_half_matrix():
@@ -821,8 +895,6 @@ def _equation7_coefficients(rho1, rho2, rho3, geometry):
     u = rho2**2 - rho1**2
     v = rho3**2 - rho1**2
     weights = np.stack([u * u, u * v, v * v, u, v, np.ones_like(u), -rho1**2], axis=-1)
-    if isinstance(geometry, _BasePerRow):
-        return (weights[:, None, :] @ _fourier_basis(geometry.column()))[:, 0]
     return weights @ _basis_coefficients(geometry)
 
 
@@ -871,30 +943,20 @@ def _companion_roots(coeffs, phi, values):
 class _BasePerRow:
     """A 3-RPR geometry whose base points differ per row of a batch: it
     answers the attributes the batch solver reads of a :class:`ThreeRPR`
-    (``a1``..``a3`` as pairs of arrays, shape (n,)) and :meth:`take` gives
-    the rows the solver works on next."""
+    (``a1``..``a3`` as pairs of arrays, shape (n,)), keeps the base points
+    as one array ``points`` (n, 3, 2), and :meth:`take` gives the rows the
+    solver works on next."""
 
-    def __init__(self, base, platform):
-        self.a1, self.a2, self.a3 = ((base[:, i, 0], base[:, i, 1]) for i in range(3))
+    def __init__(self, points, platform):
+        self.points = points
+        self.a1, self.a2, self.a3 = ((points[:, i, 0], points[:, i, 1]) for i in range(3))
         self.d1, self.d3, self.beta = platform.d1, platform.d3, platform.beta
         self.scale = platform.scale
         self.parameters = (*self.a1, *self.a2, *self.a3, self.d1, self.d3, self.beta)
 
-    def _map(self, function):
-        out = object.__new__(_BasePerRow)
-        out.a1, out.a2, out.a3 = (tuple(function(v) for v in a)
-                                  for a in (self.a1, self.a2, self.a3))
-        out.d1, out.d3, out.beta, out.scale = self.d1, self.d3, self.beta, self.scale
-        out.parameters = (*out.a1, *out.a2, *out.a3, out.d1, out.d3, out.beta)
-        return out
-
     def take(self, index):
         """The rows ``index`` (integer or boolean array)."""
-        return self._map(lambda v: v[index])
-
-    def column(self):
-        """Base coordinates shaped (n, 1), to broadcast against sampled alpha."""
-        return self._map(lambda v: v[:, None])
+        return _BasePerRow(self.points[index], self)
 
 
 def _take(geometry, index):
@@ -926,7 +988,7 @@ def solve_with_bases(rho, bases, platform):
         As :meth:`ThreeRPR.solve`'s.
     """
     rho = _as_rho(rho)
-    bases = np.asarray(bases, dtype=float)
+    bases = np.ascontiguousarray(bases, dtype=float)
     if rho.ndim != 2 or bases.shape != (rho.shape[0], 3, 2):
         raise InvalidInputError(
             f"rho must have shape (n, 3) and bases (n, 3, 2), got {rho.shape}, {bases.shape}")
@@ -939,8 +1001,12 @@ def _solve(rho, geometry):
     """:meth:`ThreeRPR.solve` of checked legs, shape (n, 3); ``geometry`` a
     :class:`ThreeRPR` or a :class:`_BasePerRow` of n rows."""
     n = rho.shape[0]
-    rho1, rho2, rho3 = rho[:, 0], rho[:, 1], rho[:, 2]
-    alpha = _real_roots(_equation7_coefficients(rho1, rho2, rho3, geometry))
+    if isinstance(geometry, _BasePerRow):
+        coeffs = _moving_base_coefficients(geometry.points, rho,
+                                           (geometry.d1, geometry.d3, geometry.beta))
+    else:
+        coeffs = _equation7_coefficients(rho[:, 0], rho[:, 1], rho[:, 2], geometry)
+    alpha = _real_roots(coeffs)
     poses = np.full((n, MAX_SOLUTIONS, 3), np.nan)
     rows, cols = np.nonzero(np.isfinite(alpha))
     if rows.size == 0:

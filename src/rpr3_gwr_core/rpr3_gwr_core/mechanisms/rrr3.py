@@ -44,8 +44,7 @@ from .rpr3 import (
     _adjugate_product,
     _corrected,
     _leg_residuals,
-    _normalised_det,
-    _row_norms,
+    _rows_margin,
     _row_terms,
     beta_from_sides,
     solve_with_bases,
@@ -53,10 +52,13 @@ from .rpr3 import (
 
 __all__ = ["ThreeRRR", "DEFAULT_THREE_RRR"]
 
-# Newton steps that polish the direct kinematics' poses, and how far [scale]
-# a polished pose may move (far beyond the roots' error, far below the gap
-# between two regular solutions).
-_POLISH_STEPS = 2
+# Newton steps that polish the direct kinematics' poses, at most (fewer once
+# the legs fit within _POLISH_FIT [scale**2], rounding's reach), and how far
+# [scale] a polished pose may move in any case (far beyond the roots' error,
+# far below the gap between two regular solutions); it may move farther
+# while it stays nearer its start than every other solution of its joints.
+_POLISH_STEPS = 6
+_POLISH_FIT = 1e-13
 _POLISH_REACH = 1e-4
 
 
@@ -71,7 +73,9 @@ class _MovingBaseRPR(Mechanism):
     * ``_base_parameters(parameters, q1, q2, q3)``: the 3-RPR parameters
       ``(c1x, c1y, c2x, c2y, c3x, c3y, d1, d3, beta)`` of its joints (a
       ``register_jitable`` function, as a staticmethod);
-    * ``_rates(rows, joints)``: ``u_i . dC_i/dq_i``, the diagonal of ``-Jq / 2``;
+    * ``_directions(base)``: ``dC_i/dq_i`` as rows ``(x1, y1, x2, y2, x3,
+      y3)`` (shape (6, ...)) from the 3-RPR parameters ``base`` of the
+      joints: ``u_i . dC_i/dq_i`` is the diagonal of ``-Jq / 2``;
     * ``_change(joints_from, joints_to)``: the joints' change;
     * ``distal``: the legs' length; ``parameters``: its geometry as a tuple;
     * ``_compiled_step`` and ``_step_kernel``: its step compiled by numba;
@@ -140,6 +144,28 @@ class _MovingBaseRPR(Mechanism):
         return np.stack([np.stack([c1x, c1y], -1), np.stack([c2x, c2y], -1),
                          np.stack([c3x, c3y], -1)], -2)
 
+    def body_outline(self, poses, joints):
+        """Proximal links ``A_i C_i`` (the 3-PRR's slid part of its rail),
+        distal links ``C_i B_i``, the platform triangle, and the passive
+        angles: ``elbow{i}`` the distal link's direction relative to
+        ``A_i C_i``, ``platform{i}`` relative to the platform
+        (:meth:`Mechanism.body_outline`)."""
+        points = self.platform.platform_points(poses)
+        moving = self.base_points(joints)
+        base = np.broadcast_to(self.platform.base, moving.shape)
+        distal = np.arctan2(points[..., 1] - moving[..., 1], points[..., 0] - moving[..., 0])
+        proximal = np.arctan2(moving[..., 1] - base[..., 1], moving[..., 0] - base[..., 0])
+        elbow, relative = distal - proximal, distal - np.asarray(poses)[..., 2:3]
+        links = []
+        for i in range(3):
+            links.append((f"proximal{i + 1}", i, (f"A{i + 1}", f"C{i + 1}"), base[..., i, :],
+                          moving[..., i, :], False))
+            links.append((f"distal{i + 1}", i, (f"C{i + 1}", f"B{i + 1}"), moving[..., i, :],
+                          points[..., i, :], False))
+        passive = [(f"{name}{i + 1}", np.arctan2(np.sin(a[..., i]), np.cos(a[..., i])))
+                   for name, a in (("elbow", elbow), ("platform", relative)) for i in range(3)]
+        return links, [("platform", ("B1", "B2", "B3"), points)], passive
+
     def check_joints(self, joints):
         """Refuse joints that are not finite numbers of shape (..., 3).
 
@@ -168,25 +194,18 @@ class _MovingBaseRPR(Mechanism):
         if joints.ndim != 2:
             raise InvalidInputError(f"joints must have shape (n, 3), got {joints.shape}")
         legs = np.full(joints.shape, self.distal)
-        count, poses = solve_with_bases(legs, self.base_points(joints), self.platform)
+        bases = self.base_points(joints)
+        count, poses = solve_with_bases(legs, bases, self.platform)
         # Where two roots of the sextic are close the root finder leaves
         # their poses off the legs by up to about 1e-5 [length unit**2], even
         # when both are regular (two assembly modes at nearly one alpha); the
         # 3-RRR, whose base points move with its joints, meets such joints
         # far more often than the 3-RPR.  Newton on the pose equations
         # restores full precision; a polished pose is kept only if it fits
-        # better and stayed close, so that Newton never trades one solution
-        # for another.
-        found = np.isfinite(poses[..., 0])
-        before, at = poses[found], np.broadcast_to(joints[:, None, :], poses.shape)[found]
-        after = self.correct(before, at, _POLISH_STEPS)
-        misfit_before = np.max(np.abs(self.residual(before, at)), axis=-1)
-        misfit_after = np.max(np.abs(self.residual(after, at)), axis=-1)
-        moved = np.max(np.abs(after - before), axis=-1)
-        keep = (misfit_after < misfit_before) & (moved < _POLISH_REACH * self.scale)
-        after[:, 2] = np.pi - np.remainder(np.pi - after[:, 2], 2 * np.pi)
-        before[keep] = after[keep]
-        poses[found] = before
+        # better and stayed close (or nearer its start than any other
+        # solution), so that Newton never trades one solution for another.
+        _polish(poses, count, bases.reshape(-1, 6).T, (self.d1, self.d3, self.beta), self.distal,
+                self.scale)
         return count, poses
 
     def margin(self, poses, joints=None):
@@ -219,12 +238,11 @@ class _MovingBaseRPR(Mechanism):
                 f"the {self.kind}'s margin needs the joints as well as the poses: a pose "
                 f"does not fix the {self._moving_points}, so the sign of det Jx is not a "
                 "function of the pose; call margin(poses, joints)")
-        rows = self._rows(poses, joints)
-        norms = _row_norms(rows, self.scale)
-        ok = (norms[0] > 0) & (norms[1] > 0) & (norms[2] > 0)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            margin = _normalised_det(rows, norms, self.scale)
-        return np.where(ok, margin, 0.0)[()]
+        poses, joints = np.broadcast_arrays(np.asarray(poses, dtype=float),
+                                            np.asarray(joints, dtype=float))
+        bases = _coordinates(self._moving_parameters(joints))
+        return _moving_margin(poses.reshape(-1, 3), bases, (self.d1, self.d3, self.beta),
+                              self.scale).reshape(poses.shape[:-1])[()]
 
     def aspect(self, poses, joints=None):
         """``sign(margin)``: +1 or -1, 0 exactly on a singularity, int8, shape (...)."""
@@ -237,9 +255,11 @@ class _MovingBaseRPR(Mechanism):
         poses = np.asarray(poses, dtype=float)
         joints_from = np.asarray(joints_from, dtype=float)
         change = self._change(joints_from, np.asarray(joints_to, dtype=float))
-        rows = self._rows(poses, joints_from)
-        rates = self._rates(rows, joints_from)
-        return poses + _solve_rows(rows, *(rate * change[..., i] for i, rate in enumerate(rates)))
+        poses, joints_from, change = np.broadcast_arrays(poses, joints_from, change)
+        base = self._moving_parameters(joints_from)
+        return _moving_euler(poses.reshape(-1, 3), _coordinates(base),
+                             self._directions(base).reshape(6, -1), change.reshape(-1, 3),
+                             (self.d1, self.d3, self.beta)).reshape(poses.shape)
 
     def correct(self, poses, joints, iterations):
         """Newton steps on the constraint equations at fixed joints.
@@ -256,12 +276,12 @@ class _MovingBaseRPR(Mechanism):
         ndarray, shape (..., 3)
             Corrected poses (alpha is not wrapped).
         """
-        poses = np.asarray(poses, dtype=float)
-        l2 = self.distal
-        for _ in range(iterations):
-            rows = self._rows(poses, joints)
-            poses = poses - 0.5 * _solve_rows(rows, *_leg_residuals(rows, (l2, l2, l2)))
-        return poses
+        poses, joints = np.broadcast_arrays(np.asarray(poses, dtype=float),
+                                            np.asarray(joints, dtype=float))
+        # The joints stay: their base points are computed once.
+        bases = _coordinates(self._moving_parameters(joints))
+        return _moving_newton(poses.reshape(-1, 3), bases, (self.d1, self.d3, self.beta),
+                              self.distal, int(iterations)).reshape(poses.shape)
 
     def residual(self, poses, joints):
         """Constraint residuals ``F_i = |B_i - C_i|**2 - distal**2``.
@@ -291,11 +311,147 @@ class _MovingBaseRPR(Mechanism):
         compiled._numba_type_ = types.FunctionType(STEP_KERNEL_SIGNATURE)
         return compiled, np.array([*self.parameters, self.scale])
 
+    def _moving_parameters(self, joints):
+        """The 3-RPR parameters of joints ``(..., 3)`` (``_base_parameters``),
+        broadcast to their shape."""
+        joints = np.asarray(joints, dtype=float)
+        return self._base_parameters(self.parameters, joints[..., 0], joints[..., 1],
+                                     joints[..., 2])
+
     def _rows(self, poses, joints):
-        poses, joints = np.asarray(poses, dtype=float), np.asarray(joints, dtype=float)
+        poses = np.asarray(poses, dtype=float)
         return _row_terms(poses[..., 0], poses[..., 1], poses[..., 2],
-                          self._base_parameters(self.parameters, joints[..., 0],
-                                                joints[..., 1], joints[..., 2]))
+                          self._moving_parameters(joints))
+
+
+@register_jitable
+def _row_parameters(bases, r, platform):
+    """The 3-RPR parameters of column ``r`` of base coordinates (6, n),
+    rows ``(c1x, c1y, c2x, c2y, c3x, c3y)``, and a platform ``(d1, d3, beta)``."""
+    return (bases[0, r], bases[1, r], bases[2, r], bases[3, r], bases[4, r], bases[5, r],
+            *platform)
+
+
+@register_jitable
+def _newton_step(rows, legs, x, y, alpha):
+    """One Newton step of the pose ``(x, y, alpha)`` of rows ``rows`` onto
+    ``legs``; a singular system leaves it, as the 3-RPR's ``_solve_rows``."""
+    e1, e2, e3 = _leg_residuals(rows, legs)
+    (dx, dy, da), det = _adjugate_product(rows, e1, e2, e3)
+    inv = 1.0 / det if det != 0.0 else 0.0
+    return x - 0.5 * dx * inv, y - 0.5 * dy * inv, alpha - 0.5 * da * inv
+
+
+@register_jitable
+def _misfit(rows, legs):
+    """The largest leg residual of a pose's rows [length unit**2]."""
+    e1, e2, e3 = _leg_residuals(rows, legs)
+    return max(abs(e1), abs(e2), abs(e3))
+
+
+@numba.njit(cache=True, nogil=True)
+def _polish(poses, count, bases, platform, distal, scale):
+    """:meth:`_MovingBaseRPR.solve`'s polish, in place: Newton steps of each
+    pose ``poses[r, :count[r]]`` (shape (n, 6, 3)) on the 3-RPR of base
+    coordinates ``bases[:, r]`` (shape (6, n)), platform ``(d1, d3, beta)`` and
+    legs ``distal``, kept if it fits the legs better and did not move to
+    another solution (the constants above)."""
+    legs = (distal, distal, distal)
+    for r in range(poses.shape[0]):
+        parameters = _row_parameters(bases, r, platform)
+        for s in range(count[r]):
+            x, y, alpha = poses[r, s, 0], poses[r, s, 1], poses[r, s, 2]
+            rows = _row_terms(x, y, alpha, parameters)
+            misfit = polished = _misfit(rows, legs)
+            px, py, palpha = x, y, alpha
+            for _ in range(_POLISH_STEPS):
+                if polished < _POLISH_FIT * scale * scale:
+                    break
+                px, py, palpha = _newton_step(rows, legs, px, py, palpha)
+                rows = _row_terms(px, py, palpha, parameters)
+                polished = _misfit(rows, legs)
+            if not polished < misfit:
+                continue
+            moved = _pose_gap(px, py, palpha, x, y, alpha, scale)
+            if moved >= _POLISH_REACH * scale and _another_within(
+                    poses[r], count[r], s, px, py, palpha, moved, scale):
+                continue
+            poses[r, s, 0], poses[r, s, 1] = px, py
+            poses[r, s, 2] = math.pi - (math.pi - palpha) % (2 * math.pi)
+
+
+@register_jitable
+def _another_within(poses, count, slot, x, y, alpha, reach, scale):
+    """Whether a solution of ``poses[:count]`` other than ``slot`` lies
+    within ``reach`` of the pose ``(x, y, alpha)``."""
+    for t in range(count):
+        if t != slot and _pose_gap(x, y, alpha, poses[t, 0], poses[t, 1], poses[t, 2],
+                                   scale) <= reach:
+            return True
+    return False
+
+
+def _coordinates(base):
+    """The base coordinates of 3-RPR parameters ``(c1x, c1y, ..., c3y,
+    ...)`` whose coordinates are arrays, as rows, shape (6, n): stacked
+    whole rows, far cheaper than interleaved points."""
+    return np.array(base[:6]).reshape(6, -1)
+
+
+@numba.njit(cache=True, nogil=True)
+def _moving_euler(poses, bases, directions, change, platform):
+    """:meth:`_MovingBaseRPR.predict` of poses (n, 3) on the 3-RPRs of base
+    coordinates ``bases`` (6, n), moving along ``directions`` (6, n) by
+    ``change`` (n, 3); ``platform`` is ``(d1, d3, beta)``."""
+    out = np.empty_like(poses)
+    for r in range(poses.shape[0]):
+        w, q = directions[:, r], change[r]
+        rows = _row_terms(poses[r, 0], poses[r, 1], poses[r, 2],
+                          _row_parameters(bases, r, platform))
+        u1x, u1y, u2x, u2y, _, u3x, u3y, _ = rows
+        (dx, dy, da), det = _adjugate_product(rows, (u1x * w[0] + u1y * w[1]) * q[0],
+                                              (u2x * w[2] + u2y * w[3]) * q[1],
+                                              (u3x * w[4] + u3y * w[5]) * q[2])
+        # A singular system leaves the pose, as the 3-RPR's _solve_rows does.
+        inv = 1.0 / det if det != 0.0 else 0.0
+        out[r, 0], out[r, 1] = poses[r, 0] + dx * inv, poses[r, 1] + dy * inv
+        out[r, 2] = poses[r, 2] + da * inv
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _moving_margin(poses, bases, platform, scale):
+    """:meth:`_MovingBaseRPR.margin` of poses (n, 3) on the 3-RPRs of base
+    coordinates ``bases`` (6, n) and platform ``(d1, d3, beta)``, shape (n,)."""
+    out = np.empty(poses.shape[0])
+    for r in range(poses.shape[0]):
+        out[r] = _rows_margin(_row_terms(poses[r, 0], poses[r, 1], poses[r, 2],
+                                         _row_parameters(bases, r, platform)), scale)
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _moving_newton(poses, bases, platform, distal, iterations):
+    """:meth:`_MovingBaseRPR.correct` of poses (n, 3) on the 3-RPRs of base
+    coordinates ``bases`` (6, n), platform ``(d1, d3, beta)`` and legs
+    ``distal``: ``iterations`` Newton steps each."""
+    legs = (distal, distal, distal)
+    out = np.empty_like(poses)
+    for r in range(poses.shape[0]):
+        parameters = _row_parameters(bases, r, platform)
+        x, y, alpha = poses[r, 0], poses[r, 1], poses[r, 2]
+        for _ in range(iterations):
+            x, y, alpha = _newton_step(_row_terms(x, y, alpha, parameters), legs, x, y, alpha)
+        out[r, 0], out[r, 1], out[r, 2] = x, y, alpha
+    return out
+
+
+@register_jitable
+def _pose_gap(x, y, alpha, x2, y2, alpha2, scale):
+    """Distance of two poses, the orientations' short way round at ``scale``."""
+    turn = alpha - alpha2
+    turn -= 2 * math.pi * math.floor(turn / (2 * math.pi) + 0.5)
+    return math.sqrt((x - x2) ** 2 + (y - y2) ** 2 + (turn * scale) ** 2)
 
 
 # The constraint equations are the 3-RPR's with the elbows as base points:
@@ -311,12 +467,15 @@ def _elbow_parameters(parameters, t1, t2, t3):
 
 
 @register_jitable
-def _joint_rates(rows, l1, t1, t2, t3):
-    """``u_i . dC_i/dth_i``, the diagonal of ``-Jq / 2``."""
+def _joint_rates(rows, parameters, base):
+    """``u_i . dC_i/dth_i``, the diagonal of ``-Jq / 2``, from the elbows
+    ``base`` (:func:`_elbow_parameters`): ``dC_i/dth_i`` is ``C_i - A_i``
+    turned a quarter, which spares the joints' sines and cosines."""
     u1x, u1y, u2x, u2y, _, u3x, u3y, _ = rows
-    return (l1 * (np.cos(t1) * u1y - np.sin(t1) * u1x),
-            l1 * (np.cos(t2) * u2y - np.sin(t2) * u2x),
-            l1 * (np.cos(t3) * u3y - np.sin(t3) * u3x))
+    a1x, a1y, a2x, a2y, a3x, a3y = parameters[:6]
+    c1x, c1y, c2x, c2y, c3x, c3y = base[:6]
+    return ((c1x - a1x) * u1y - (c1y - a1y) * u1x, (c2x - a2x) * u2y - (c2y - a2y) * u2x,
+            (c3x - a3x) * u3y - (c3y - a3y) * u3x)
 
 
 @register_jitable
@@ -325,20 +484,14 @@ def _turn_difference(change):
     return change - 2 * np.pi * np.floor(change / (2 * np.pi) + 0.5)
 
 
-def _solve_rows(rows, r1, r2, r3):
-    """``(Jx / 2)^-1 r`` by the adjugate of the rows; a singular system gives 0."""
-    (dx, dy, da), det = _adjugate_product(rows, r1, r2, r3)
-    inv = np.where(det != 0, 1.0 / np.where(det != 0, det, 1.0), 0.0)
-    return np.stack(np.broadcast_arrays(dx * inv, dy * inv, da * inv), axis=-1)
-
-
 @numba.njit(cache=True)
 def _compiled_step(parameters, scale, x, y, alpha, a1, a2, a3, b1, b2, b3):
     """One predictor-corrector step from joints ``(a1, a2, a3)`` to
     ``(b1, b2, b3)``: ``(converged, x, y, alpha, margin)``."""
     l1, l2 = parameters[9], parameters[10]
-    rows = _row_terms(x, y, alpha, _elbow_parameters(parameters, a1, a2, a3))
-    v1, v2, v3 = _joint_rates(rows, l1, a1, a2, a3)
+    base = _elbow_parameters(parameters, a1, a2, a3)
+    rows = _row_terms(x, y, alpha, base)
+    v1, v2, v3 = _joint_rates(rows, parameters, base)
     q1, q2, q3 = _turn_difference(b1 - a1), _turn_difference(b2 - a2), _turn_difference(b3 - a3)
     (dx, dy, da), det = _adjugate_product(rows, v1 * q1, v2 * q2, v3 * q3)
     if det == 0.0:
@@ -438,8 +591,11 @@ class ThreeRRR(_MovingBaseRPR):
     _compiled_step = staticmethod(_compiled_step)
     _step_kernel = staticmethod(_step_kernel)
 
-    def _rates(self, rows, joints):
-        return _joint_rates(rows, self.l1, joints[..., 0], joints[..., 1], joints[..., 2])
+    def _directions(self, base):
+        # dC_i/dth_i is C_i - A_i turned a quarter.
+        (a1x, a1y), (a2x, a2y), (a3x, a3y) = self.a1, self.a2, self.a3
+        c1x, c1y, c2x, c2y, c3x, c3y = base[:6]
+        return np.array([a1y - c1y, c1x - a1x, a2y - c2y, c2x - a2x, a3y - c3y, c3x - a3x])
 
     def _change(self, joints_from, joints_to):
         return _turn_difference(joints_to - joints_from)

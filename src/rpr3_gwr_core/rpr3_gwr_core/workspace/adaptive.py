@@ -35,6 +35,14 @@ along the edges of coarse blocks, and hanging points of a refined block's
 face joined across a coarse block to the refined block opposite.  Each cell
 has at most one neighbour per face, so the rotary disk search applies as on
 a uniform grid.
+
+Periodic axes
+-------------
+A periodic axis of the base (a revolute joint's full turn) has as many
+blocks as base points: its last block lies between its last base point and
+its first, one turn on.  Its fine lattice has ``r`` points per base point,
+and blocks, faces, volumes, depths and cell lookups wrap around it as a
+uniform grid's do (:mod:`.grid`).
 """
 
 import functools
@@ -52,7 +60,7 @@ from .continuity import match_solutions
 from .field import compute_field
 from .grid import MAX_GRID_CELLS, Axis, Grid, GridBase, _box_points, _within_box, lattice_box
 
-__all__ = ["AdaptiveGrid", "refine", "grid_from_dict", "DEFAULT_REFINEMENT",
+__all__ = ["AdaptiveGrid", "refine", "grid_from_dict", "coarse_base", "DEFAULT_REFINEMENT",
            "DEFAULT_REFINE_MARGIN"]
 
 DEFAULT_REFINEMENT = 4
@@ -95,9 +103,6 @@ class AdaptiveGrid(GridBase):
     def __init__(self, base, refinement, blocks):
         if not isinstance(base, Grid):
             raise InvalidInputError(f"an adaptive grid refines a Grid, got {type(base).__name__}")
-        if base.periodic:
-            # Its blocks, faces and lookups do not wrap.
-            raise InvalidInputError("an adaptive grid refines grids without periodic axes")
         if (isinstance(refinement, bool) or not isinstance(refinement, numbers.Integral)
                 or refinement < 2):
             raise InvalidInputError(f"refinement is an integer >= 2, got {refinement!r}")
@@ -106,19 +111,23 @@ class AdaptiveGrid(GridBase):
                                     f"got shape {base.shape}")
         self.base = base
         self.refinement = int(refinement)
-        self.block_shape = tuple(n - 1 for n in base.shape)
+        self._periodic = np.array([a.periodic for a in base.axes])
+        self.block_shape = _block_shape(base)
         blocks = np.unique(np.asarray(blocks, dtype=np.int64).ravel())
         if blocks.size and (blocks[0] < 0 or blocks[-1] >= math.prod(self.block_shape)):
             raise InvalidInputError("refined block index outside the base grid")
         self.blocks = blocks
         r = self.refinement
-        self.fine_shape = tuple((n - 1) * r + 1 for n in base.shape)
+        self.fine_shape = tuple(n * r if a.periodic else (n - 1) * r + 1
+                                for n, a in zip(base.shape, base.axes))
         if math.prod(self.fine_shape) > _MAX_LATTICE_POINTS:
             raise InvalidInputError(
                 f"refining {base.shape} base points {r} times gives a fine lattice of "
                 f"{math.prod(self.fine_shape)} points, more than the limit of "
                 f"{_MAX_LATTICE_POINTS}")
-        self.axes = tuple(Axis(a.joint, a.low, a.low + a.step * (a.count - 1), a.step / r)
+        self.axes = tuple(Axis(a.joint, a.low, a.low + a.step * (a.count - 1 / r if a.periodic
+                                                                 else a.count - 1),
+                               a.step / r, a.periodic)
                           for a in base.axes)
         self._index = self._sample_points()
         self._pairs = None
@@ -135,6 +144,8 @@ class AdaptiveGrid(GridBase):
         # Blocks in chunks: a block brings (r + 1)**d points.
         for start in range(0, len(corner), 4096):
             inside = (corner[start:start + 4096, None, :] + offsets[None]).reshape(-1, self.ndim)
+            # A block past a periodic axis' last base point ends at its first.
+            inside = np.where(self._periodic, inside % np.array(self.fine_shape), inside)
             flat[np.ravel_multi_index(tuple(inside.T), self.fine_shape)] = True
         size = int(np.count_nonzero(flat))
         if size > MAX_GRID_CELLS:
@@ -200,13 +211,15 @@ class AdaptiveGrid(GridBase):
 
     def pairs(self):
         """Face-adjacent cell pairs (module doc), one ``(lower, upper)`` pair of
-        cell arrays per axis, ``lower`` before ``upper`` along the axis."""
+        cell arrays per axis, ``lower`` before ``upper`` along the axis (across
+        a periodic axis' seam, ``lower`` the last)."""
         if self._pairs is None:
             # int32 halves the table: a grid has far fewer than 2**31 cells.
             rank = np.full(math.prod(self.fine_shape), -1, dtype=np.int32)
             rank[self._index] = np.arange(self.size)
             self._pairs = [_axis_pairs(self._index, rank, math.prod(self.fine_shape[axis + 1:]),
-                                       self.fine_shape[axis], self.refinement)
+                                       self.fine_shape[axis], self.refinement,
+                                       bool(self._periodic[axis]))
                            for axis in range(self.ndim)]
         return [(lower, upper) for lower, upper, _ in self._pairs]
 
@@ -249,9 +262,10 @@ class AdaptiveGrid(GridBase):
         fine_box = refined
         for axis in range(d):
             fine_box = np.repeat(fine_box, r, axis=axis)
-        fine_share = _corner_sums(fine_box)
+        fine_share = _corner_sums(fine_box, self._periodic)
         coarse_share = np.zeros(self.fine_shape)
-        coarse_share[tuple(slice(None, None, r) for _ in range(d))] = _corner_sums(~refined)
+        coarse_share[tuple(slice(None, None, r) for _ in range(d))] = _corner_sums(
+            ~refined, self._periodic)
         volume = (fine_share * (float(np.prod(self.steps)) / 2 ** d)
                   + coarse_share * (float(np.prod(self.base.steps)) / 2 ** d))
         return volume.ravel()[self._index]
@@ -272,7 +286,10 @@ class AdaptiveGrid(GridBase):
         """
         cells = np.asarray(cells, dtype=np.int64)
         multi = self._multi(cells)
-        border = np.min(np.minimum(multi, np.array(self.fine_shape) - 1 - multi), axis=1) + 1.0
+        # A periodic axis has no border.
+        border = np.min(np.where(self._periodic, np.inf,
+                                 np.minimum(multi, np.array(self.fine_shape) - 1 - multi)),
+                        axis=1) + 1.0
         member = np.zeros(self.size, dtype=bool)
         member[cells] = True
         rows, cols, weights = [], [], []
@@ -298,11 +315,13 @@ class AdaptiveGrid(GridBase):
     def cells_in_box(self, point, radius):
         """Cells whose axis values lie within ``radius`` fine steps of a point
         along every axis, ascending (:meth:`.Grid.cells_in_box`)."""
+        point = self._wrapped(point)
         index = _box_points(point, radius, np.array([a.low for a in self.axes]),
-                            np.array(self.steps), np.array(self.fine_shape))
+                            np.array(self.steps), np.array(self.fine_shape), self._periodic)
         cells = self._lookup(np.ravel_multi_index(tuple(index.T), self.fine_shape))
         cells = cells[cells >= 0]
-        return _within_box(cells, self.coordinates_of(cells), point, radius, self.steps)
+        return _within_box(cells, self.coordinates_of(cells), point, radius, self.steps,
+                           self.periods)
 
     def coordinates_of(self, cells):
         """Axis values of cells, shape (len(cells), ndim)."""
@@ -321,18 +340,24 @@ class AdaptiveGrid(GridBase):
         r, d = self.refinement, self.ndim
         low = np.array([a.low for a in self.axes])
         steps = np.array(self.steps)
-        here = (np.array([joints[a.joint] for a in self.axes]) - low) / steps
+        here = (self._wrapped([joints[a.joint] for a in self.axes]) - low) / steps
         reach = int(math.ceil(radius))
         fine = np.rint(here).astype(np.int64) + lattice_box(d, -reach, reach)
         base = (np.floor(here / r).astype(np.int64) + lattice_box(d, -1, 2)) * r
         index = np.unique(np.vstack([fine, base]), axis=0)
-        index = index[np.all((index >= 0) & (index < np.array(self.fine_shape)), axis=1)]
+        shape = np.array(self.fine_shape)
+        index = index[np.all(self._periodic | ((index >= 0) & (index < shape)), axis=1)]
         distance = np.linalg.norm(index - here, axis=1)
         near = distance <= max(radius, r * math.sqrt(d))
+        # Around a periodic axis' seam, indices past either end wrap.
+        index = np.where(self._periodic, index % shape, index)
         cells = self._lookup(np.ravel_multi_index(tuple(index[near].T), self.fine_shape))
         distance = distance[near][cells >= 0]
         cells = cells[cells >= 0]
-        return cells[np.lexsort((cells, distance))].tolist()
+        cells = cells[np.lexsort((cells, distance))]
+        # A cell met on both sides of a seam is listed once, where nearest.
+        _, first = np.unique(cells, return_index=True)
+        return cells[np.sort(first)].tolist()
 
     def to_dict(self):
         """Plain-data form, for JSON."""
@@ -349,20 +374,23 @@ class AdaptiveGrid(GridBase):
 
 
 @numba.njit(cache=True, nogil=True)
-def _axis_pairs(index, rank, stride, length, refinement):
+def _axis_pairs(index, rank, stride, length, refinement, periodic):
     """Each cell and the next cell along an axis within a base step, and their
     distance in fine steps: ``(lower, upper, gap)``.
 
     ``index`` holds the cells' fine flat indices, ``rank`` maps fine flat
     indices to cells (-1 none), ``stride`` and ``length`` are the axis's on
-    the fine lattice."""
+    the fine lattice; along a ``periodic`` axis the next cell after the
+    last lattice point is looked for from the first on."""
     upper = np.full(index.size, -1, dtype=np.int64)
     gap = np.zeros(index.size, dtype=np.int64)
     for cell in range(index.size):
         position = (index[cell] // stride) % length
+        start = index[cell] - position * stride
+        reach = refinement if periodic else min(refinement, length - 1 - position)
         # Nearest first: the nearest next cell along the line wins.
-        for step in range(1, min(refinement, length - 1 - position) + 1):
-            other = rank[index[cell] + step * stride]
+        for step in range(1, reach + 1):
+            other = rank[start + ((position + step) % length) * stride]
             if other >= 0:
                 upper[cell], gap[cell] = other, step
                 break
@@ -370,13 +398,34 @@ def _axis_pairs(index, rank, stride, length, refinement):
     return lower, upper[lower], gap[lower]
 
 
-def _corner_sums(boxes):
+def _block_shape(base):
+    """Blocks along each axis of a base grid: one fewer than its points, as
+    many along a periodic axis (module doc)."""
+    return tuple(n if a.periodic else n - 1 for n, a in zip(base.shape, base.axes))
+
+
+def _corner_sums(boxes, periodic):
     """For every corner point of an array of boxes, how many of the boxes
-    around it are set; shape ``boxes.shape + 1`` on every axis."""
-    out = np.zeros(tuple(n + 1 for n in boxes.shape))
+    around it are set; shape ``boxes.shape + 1`` on every axis but the
+    ``periodic`` ones, whose boxes wrap."""
+    out = np.zeros(tuple(n if p else n + 1 for n, p in zip(boxes.shape, periodic)))
     for corner in itertools.product((0, 1), repeat=boxes.ndim):
-        out[tuple(slice(c, c + n) for c, n in zip(corner, boxes.shape))] += boxes
+        moved = boxes
+        for axis in np.flatnonzero(periodic):
+            moved = np.roll(moved, corner[axis], axis=axis)
+        out[tuple(slice(None) if p else slice(c, c + n)
+                  for c, n, p in zip(corner, boxes.shape, periodic))] += moved
     return out
+
+
+def _corner_view(values, corner, periodic, blocks):
+    """``values`` (one per base point or edge) at one corner of every block,
+    shape ``blocks``: the next point along the axes where ``corner`` is 1,
+    wrapped along the ``periodic`` ones."""
+    for axis in np.flatnonzero(periodic):
+        values = np.roll(values, -corner[axis], axis=axis)
+    return values[tuple(slice(0, n) if p else slice(c, c + n)
+                        for c, n, p in zip(corner, blocks, periodic))]
 
 
 def grid_from_dict(data):
@@ -385,6 +434,59 @@ def grid_from_dict(data):
     if isinstance(data, dict) and data.get("kind") == "adaptive":
         return AdaptiveGrid.from_dict(data)
     return Grid.from_dict(data)
+
+
+def coarse_base(grid, refinement=DEFAULT_REFINEMENT):
+    """The base grid whose refinement by ``refinement`` has the lattice of
+    ``grid``: the base for :func:`refine` (or ``cached_roadmap(...,
+    refinement=...)``) of a mechanism file's whole box, periodic axes
+    included.
+
+    Parameters
+    ----------
+    grid : Grid
+        The fine lattice: along each periodic axis a multiple of
+        ``refinement`` cells, along each other axis one more than a multiple.
+    refinement : int
+        Fine points per base step, at least 2.
+
+    Returns
+    -------
+    Grid
+        Its steps ``refinement`` times the grid's, same ranges and fixed joints.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``grid`` is not a :class:`~.grid.Grid`, ``refinement`` is not an
+        integer >= 2 or an axis' cells do not divide as above.
+
+    Examples
+    --------
+    The 3-RRR's turns of 120 cells (``config/three_rrr.yaml``) from base
+    turns of 40:
+
+    >>> import math
+    >>> turn = Axis(0, -math.pi, math.pi - 2 * math.pi / 120, 2 * math.pi / 120, periodic=True)
+    >>> coarse_base(Grid(axes=(turn,)), 3).shape
+    (40,)
+    """
+    if not isinstance(grid, Grid):
+        raise InvalidInputError(f"coarse_base takes a Grid, got {type(grid).__name__}")
+    if (isinstance(refinement, bool) or not isinstance(refinement, numbers.Integral)
+            or refinement < 2):
+        raise InvalidInputError(f"refinement is an integer >= 2, got {refinement!r}")
+    r = int(refinement)
+    axes = []
+    for a in grid.axes:
+        steps = a.count if a.periodic else a.count - 1
+        if steps % r:
+            raise InvalidInputError(
+                f"joint {a.joint}'s {a.count} cells do not refine {r} times from a base grid: "
+                f"{'they' if a.periodic else 'their steps'} must be a multiple of {r}")
+        axes.append(Axis(a.joint, a.low, a.low + a.step * (steps - r if a.periodic else steps),
+                         a.step * r, a.periodic))
+    return Grid(axes=tuple(axes), fixed=grid.fixed)
 
 
 def refine(mechanism, base, refinement=DEFAULT_REFINEMENT, min_margin=DEFAULT_REFINE_MARGIN):
@@ -420,23 +522,30 @@ def refine(mechanism, base, refinement=DEFAULT_REFINEMENT, min_margin=DEFAULT_RE
     AdaptiveGrid(base, refinement, ())  # validates before the field is computed
     field = compute_field(mechanism, base)
     shape = base.shape
-    blocks = tuple(n - 1 for n in shape)
+    blocks = _block_shape(base)
+    periodic = np.array([a.periodic for a in base.axes])
     count = field.count.reshape(shape).astype(np.int16)
     weakest = np.min(np.where(field.valid, np.abs(field.margin), np.inf), axis=1).reshape(shape)
     uniform = np.ones(blocks, dtype=bool)
     corners = list(itertools.product((0, 1), repeat=base.ndim))
+    first = _corner_view(count, corners[0], periodic, blocks)
     for corner in corners:
-        here = tuple(slice(c, c + n) for c, n in zip(corner, blocks))
-        uniform &= (count[here] == count[tuple(slice(0, n) for n in blocks)]) & (
-            weakest[here] >= min_margin)
+        uniform &= ((_corner_view(count, corner, periodic, blocks) == first)
+                    & (_corner_view(weakest, corner, periodic, blocks) >= min_margin))
     for axis, (lower, upper) in enumerate(base.pairs()):
         match = match_solutions(field, lower, upper)
         continues = ((field.count[lower] == field.count[upper])
                      & np.all((match >= 0) == field.valid[lower], axis=1))
-        edge_shape = tuple(n - 1 if k == axis else n for k, n in enumerate(shape))
-        continues = continues.reshape(edge_shape)
+        inner = tuple(n - 1 if k == axis else n for k, n in enumerate(shape))
+        edges = continues[:math.prod(inner)].reshape(inner)
+        if periodic[axis]:
+            # The grid's pairs across the seam come last: edge i joins base
+            # points i and i + 1 along the axis, the last one the first.
+            seam = continues[math.prod(inner):].reshape(
+                tuple(1 if k == axis else n for k, n in enumerate(shape)))
+            edges = np.concatenate([edges, seam], axis=axis)
         for corner in corners:
             if corner[axis]:
                 continue
-            uniform &= continues[tuple(slice(c, c + n) for c, n in zip(corner, blocks))]
+            uniform &= _corner_view(edges, corner, periodic, blocks)
     return AdaptiveGrid(base, refinement, np.flatnonzero(~uniform.ravel()))

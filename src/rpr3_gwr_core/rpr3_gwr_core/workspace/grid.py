@@ -604,8 +604,13 @@ def lattice_cell(point, low, steps, shape, index, base_steps, refinement, period
         if not 0.0 <= nearest <= shape[k] - 1:
             return -1
         flat = flat * shape[k] + int(nearest)
-        top = (shape[k] - 1) // refinement
-        base = min(max(np.rint((value - low[k]) / base_steps[k]), 0.0), float(top))
+        base = np.rint((value - low[k]) / base_steps[k])
+        if periods[k] > 0:
+            # A periodic axis has shape[k] / refinement base points, the
+            # one after its last being its first.
+            base = base % (shape[k] // refinement)
+        else:
+            base = min(max(base, 0.0), float((shape[k] - 1) // refinement))
         coarse = coarse * shape[k] + int(base) * refinement
     if index.size == 0:
         return flat
