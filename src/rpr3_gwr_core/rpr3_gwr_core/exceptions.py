@@ -14,7 +14,9 @@ __all__ = [
     "AssemblyModeError",
     "SingularityError",
     "InfeasiblePathError",
+    "CollisionError",
     "ValidationError",
+    "PlanningTimeoutError",
 ]
 
 
@@ -64,6 +66,12 @@ class InfeasiblePathError(GWRError):
     """The roadmap connects no path between two configurations."""
 
     code = "INFEASIBLE"
+
+
+class CollisionError(GWRError, ValueError):
+    """A configuration collides with the scene or breaks one of its limits."""
+
+    code = "IN_COLLISION"
 
 
 class ValidationError(GWRError):

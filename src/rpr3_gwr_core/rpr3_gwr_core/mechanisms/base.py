@@ -22,6 +22,7 @@ import numbers
 import numpy as np
 
 from ..exceptions import InvalidInputError
+from ..world.bodies import assemble_bodies
 from .continuation import STEP_KERNEL_SIGNATURE
 
 __all__ = ["Mechanism", "mechanism_from_dict", "register_mechanism", "STEP_KERNEL_SIGNATURE",
@@ -210,6 +211,66 @@ class Mechanism(abc.ABC):
             For mechanisms (or slices) without cusp equations.
         """
         raise NotImplementedError(f"{self.kind} has no cusp equations")
+
+    def body_outline(self, poses, joints):
+        """The moving bodies of configurations as segments and polygons
+        between named joint points, and the passive joint angles.
+
+        Parameters
+        ----------
+        poses : ndarray, shape (..., pose_size)
+        joints : ndarray, shape (..., n_joints)
+            The joints the poses solve.
+
+        Returns
+        -------
+        links : list of (str, int, (str, str), ndarray, ndarray, bool)
+            Per link: its name, its leg (from 0), the names of its end
+            points, the end points (shape (..., 2) each) [length unit] and
+            whether it is a prismatic leg (a housing and a rod).
+        plates : list of (str, tuple of str, ndarray)
+            Per plate (the platform): its name, the names of its vertices and
+            the vertices, convex, shape (..., k, 2) [length unit].
+        passive : list of (str, ndarray)
+            Per passive joint: its name and its angle, shape (...) [rad].
+
+        Raises
+        ------
+        NotImplementedError
+            For mechanisms that do not describe their bodies.
+        """
+        raise NotImplementedError(f"{self.kind} does not describe its bodies")
+
+    def bodies(self, poses, joints, model=None):
+        """The moving bodies of configurations as capsules and polygons.
+
+        Parameters
+        ----------
+        poses : array_like, shape (..., pose_size)
+        joints : array_like, shape (..., n_joints)
+            The joints the poses solve, broadcast against ``poses``.
+        model : BodyModel, optional
+            Widths and layers (:class:`~rpr3_gwr_core.world.bodies.BodyModel`);
+            the default puts each leg in a layer of its own.
+
+        Returns
+        -------
+        Bodies
+            :class:`~rpr3_gwr_core.world.bodies.Bodies`, batch shape the
+            broadcast of the two leading shapes.
+
+        Raises
+        ------
+        InvalidInputError
+            If poses or joints are not finite or of the wrong size, or the
+            model's layers do not fit the legs.
+        """
+        poses = finite_vectors(poses, "poses", self.pose_size)
+        joints = finite_vectors(joints, "joints", self.n_joints)
+        shape = np.broadcast_shapes(poses.shape[:-1], joints.shape[:-1])
+        poses = np.broadcast_to(poses, shape + poses.shape[-1:])
+        joints = np.broadcast_to(joints, shape + joints.shape[-1:])
+        return assemble_bodies(self.body_outline(poses, joints), model, self.scale)
 
     def check_joints(self, joints):
         """Raise ``InvalidInputError`` for joint values the mechanism cannot take.

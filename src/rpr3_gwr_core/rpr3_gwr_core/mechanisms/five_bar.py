@@ -159,6 +159,27 @@ class FiveBar(Mechanism):
                 f"{float(dist.ravel()[k]):.1e} m): the direct kinematics is a whole circle of "
                 f"singular poses, of radius l2 = {self.l2:g} m around them")
 
+    def body_outline(self, poses, joints):
+        """Proximal links ``A_i C_i`` and distal links ``C_i P``, and the
+        passive angles: ``elbow{i}`` the distal link's direction relative to
+        the proximal one, ``end`` that of ``C2 P`` relative to ``C1 P``
+        (:meth:`Mechanism.body_outline`)."""
+        th = np.asarray(joints)
+        end = np.asarray(poses)[..., :2]
+        base = np.broadcast_to(np.array([[0.0, 0.0], [self.d, 0.0]]), th.shape + (2,))
+        elbow = base + self.l1 * np.stack([np.cos(th), np.sin(th)], axis=-1)
+        distal = np.arctan2(end[..., None, 1] - elbow[..., 1], end[..., None, 0] - elbow[..., 0])
+        links = []
+        for i in range(2):
+            links.append((f"proximal{i + 1}", i, (f"A{i + 1}", f"C{i + 1}"), base[..., i, :],
+                          elbow[..., i, :], False))
+            links.append((f"distal{i + 1}", i, (f"C{i + 1}", "P"), elbow[..., i, :], end, False))
+        relative = np.concatenate([distal - th, distal[..., 1:] - distal[..., :1]], axis=-1)
+        relative = np.arctan2(np.sin(relative), np.cos(relative))
+        passive = [("elbow1", relative[..., 0]), ("elbow2", relative[..., 1]),
+                   ("end", relative[..., 2])]
+        return links, [], passive
+
     def solve(self, joints):
         joints = finite_vectors(joints, "joints", 2)
         if joints.ndim != 2:

@@ -94,7 +94,8 @@ class NodeCosts(NamedTuple):
     node_cost : ndarray of int64, shape (n_nodes,)
         Cost of each node in whole units (needed on the searched patches).
     node_margin : ndarray of float64, shape (n_nodes,)
-        Margin magnitude of each node's solution.
+        Margin magnitude of each node's solution; negative for a node no
+        search may enter (a scene blocks it).
     clearance : float
     penalty : int
         Nodes with a margin below ``clearance`` cost ``penalty`` times more.
@@ -372,7 +373,7 @@ def _search(graph, costs, layer, sources, target, blocked, guide, stop, work):
             if closed[v]:
                 continue
             there = layer[node_patch[v]]
-            if there < 0 or (there != here and there != here + 1):
+            if there < 0 or (there != here and there != here + 1) or node_margin[v] < 0:
                 continue
             if blocked.size and _is_blocked(blocked, node_cell[v]):
                 continue

@@ -47,6 +47,8 @@ DEFAULT_CLEARANCE_WEIGHT = 0.0
 # Clearances outside the index whose gate distances a planner keeps (a full
 # 3-DOF roadmap's take up to 180 MB each).
 _KEPT_CLEARANCES = 4
+# Scenes whose node margins a planner keeps (a full 3-DOF roadmap's take 24 MB each).
+_KEPT_SCENES = 2
 
 
 @dataclass(frozen=True)
@@ -91,6 +93,7 @@ class LocalPlanner:
         self._extra_fields = {}
         self._extra_costs = {}
         self._crossings = {}
+        self._scenes = {}
         self._work = threading.local()
 
     def _costs(self, weight, k):
@@ -106,6 +109,22 @@ class LocalPlanner:
             costs[self.index.offsets[k]:self.index.offsets[k + 1]] = cost
             floors[k] = int(cost.min(initial=1))
         return costs, floors[k]
+
+    def _scene_margins(self, world):
+        """The node margins of a scene: -1 where it blocks the solution (no
+        search enters), 0 where it crowds an obstacle (costs as below any
+        clearance).  The last few scenes' are kept."""
+        kept = self._scenes.get(id(world))
+        if kept is not None and kept[0] is world:
+            return kept[1]
+        graph = self.index.graph
+        margins = np.where(world.free[graph.node_cell, self.index.node_slot],
+                           self.index.node_margin, -1.0)
+        margins[world.crowded[graph.node_cell, self.index.node_slot]] = 0.0
+        self._scenes[id(world)] = (world, margins)
+        for oldest in list(self._scenes)[:-_KEPT_SCENES]:
+            self._scenes.pop(oldest, None)
+        return margins
 
     def _work_arrays(self):
         """Work arrays of this thread's searches (:func:`~.astar.layered_astar`),
@@ -325,7 +344,7 @@ class LocalPlanner:
 
     def plan(self, patches, start_cell, goal_cell, blocked=(), clearance=0.0,
              clearance_weight=DEFAULT_CLEARANCE_WEIGHT, termination=NEVER, any_gates=False,
-             most_settled=None):
+             most_settled=None, world=None):
         """Best cell path from a start cell to a goal cell through given patches,
         or through any.
 
@@ -356,6 +375,10 @@ class LocalPlanner:
             The search stops after settling this many nodes, as at its
             deadline: a budget of work that, unlike time, gives the same
             answer on any machine and under any load.
+        world : SceneRoadmap, optional
+            A scene (:meth:`~rpr3_gwr_core.world.WorldIndex.apply`): the
+            solutions it blocks are not entered, and those crowding its
+            obstacles cost as those below the clearance.
 
         Returns
         -------
@@ -384,8 +407,9 @@ class LocalPlanner:
             source, target, layer, guide, costs = self._layered_search(
                 patches, start_cell, goal_cell, weight, clearance)
         graph = self.index.graph
+        margins = self.index.node_margin if world is None else self._scene_margins(world)
         nodes, cost = layered_astar(
-            graph, NodeCosts(costs, self.index.node_margin, clearance, LOW_MARGIN_FACTOR),
+            graph, NodeCosts(costs, margins, clearance, LOW_MARGIN_FACTOR),
             layer, source, target, blocked, guide,
             Stop(termination.deadline, 2**62 if most_settled is None else int(most_settled)),
             self._work_arrays())

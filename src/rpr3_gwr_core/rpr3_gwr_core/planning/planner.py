@@ -26,6 +26,7 @@ the shortcut path fails it, the cell path is tried, then the next candidate,
 and the plan is an error when none passes.
 """
 
+import dataclasses
 from dataclasses import dataclass, field as dataclass_field
 import itertools
 import math
@@ -33,8 +34,8 @@ import numbers
 
 import numpy as np
 
-from ..exceptions import (GWRError, InfeasiblePathError, InvalidInputError, PlanningTimeoutError,
-                          ValidationError)
+from ..exceptions import (CollisionError, GWRError, InfeasiblePathError, InvalidInputError,
+                          PlanningTimeoutError, ValidationError)
 from .global_planning import GlobalPath, RoadmapIndex, feasibility, global_paths, longer_paths
 from .index import PlanningIndex
 from .local_planning import DEFAULT_CLEARANCE_WEIGHT, LocalPlanner
@@ -274,6 +275,7 @@ class Planner:
         self._joints = roadmap.grid.joints()
         self._free = list(roadmap.grid.axis_joints)
         seg, mechanism = roadmap.segmentation, roadmap.mechanism
+        self._world_indices = {}
         self._sheets = Sheets(roadmap.grid.lattice, roadmap.grid.step, _SAMPLES_PER_CELL,
                               seg.patch, seg.field.margin, seg.field.poses,
                               np.where(mechanism.angular, mechanism.scale, 0.0))
@@ -307,7 +309,7 @@ class Planner:
         return locate(self.roadmap, configuration, mode_tol=mode_tol,
                       min_margin=self.min_margin, max_step=self.max_step)
 
-    def plan(self, start, goal, options=PlanOptions(), termination=NEVER):
+    def plan(self, start, goal, options=PlanOptions(), termination=NEVER, world=None):
         """Plan from one configuration to another.
 
         Parameters
@@ -320,6 +322,11 @@ class Planner:
             Where planning stops: past its deadline the plan is the valid
             path found so far, unsmoothed if smoothing was not done yet, or
             a ``PlanningTimeoutError`` when there is none.
+        world : SceneRoadmap, optional
+            The roadmap restricted to a scene (:meth:`apply_scene`): the plan
+            keeps its bodies off the obstacles, within the limits, and
+            ``obstacle_clearance`` away where it can; without one, the
+            mechanism moves in empty space.
 
         Returns
         -------
@@ -328,19 +335,32 @@ class Planner:
         Raises
         ------
         GWRError
-            ``InfeasiblePathError`` (with ``.reason``) when the roadmap has no
-            path, ``ValidationError`` when no path passes the validator,
+            ``CollisionError`` when the start or the goal collides or breaks
+            a limit of the scene, ``InfeasiblePathError`` (with ``.reason``,
+            ``"blocked"`` when the roadmap joins them and the scene does not)
+            when there is no path, ``ValidationError`` when no path passes the validator,
             ``PlanningTimeoutError`` when the deadline passed before one did,
             ``InvalidInputError`` when the limits cannot time the path, or
             the locating errors of :func:`~rpr3_gwr_core.locate.locate`.
         """
         s = self.locate(start, options.mode_tol)
         g = self.locate(goal, options.mode_tol)
+        if world is not None:
+            self._check_free(world, s, "start")
+            self._check_free(world, g, "goal")
         answer = feasibility(self.global_index, s.patch, g.patch)
+        if answer.feasible and world is not None:
+            answer = world.feasibility(s, g)
+            if answer.reason == "in_collision":
+                raise CollisionError(
+                    "the scene blocks the grid cell solution of the "
+                    f"{'start' if answer.start_part < 0 else 'goal'} (an obstacle or a limit "
+                    "lies within a cell of it)")
         if not answer.feasible:
             error = InfeasiblePathError(
                 f"no path from patch {s.patch} to patch {g.patch}: "
-                f"{answer.reason.replace('_', ' ')}")
+                f"{answer.reason.replace('_', ' ')}"
+                + (" by the scene" if answer.reason == "blocked" else ""))
             error.reason = answer.reason
             raise error
         paths = global_paths(self.global_index, s.patch, g.patch, options.weighted,
@@ -352,8 +372,8 @@ class Planner:
                         poses=np.zeros((0, mechanism.pose_size)))
         failures = []
         found = None
-        if not options.weighted and not self.roadmap.grid.fixed:
-            found = self._promising(s, g, options.clearance, termination)
+        if world is not None or (not options.weighted and not self.roadmap.grid.fixed):
+            found = self._promising(s, g, options.clearance, termination, world)
         for path in self._attempts(paths, s.patch, g.patch):
             if found is not None:
                 break
@@ -361,7 +381,7 @@ class Planner:
                 if termination():
                     raise PlanningTimeoutError("the time limit passed")
                 result, joints, patches = self._validated_path(path, s, g, options.clearance,
-                                                               termination)
+                                                               termination, world=world)
             except InfeasiblePathError as exc:
                 failures.append(f"path {list(path.patches)}: {exc}")
                 continue
@@ -384,7 +404,7 @@ class Planner:
         if options.smooth and len(joints) > 2 and not termination():
             rounded = self._round(joints, patches, s, g, options.clearance,
                                   min(result.min_margin,
-                                      self._kept_margin(s, g, options.clearance)))
+                                      self._kept_margin(s, g, options.clearance)), world)
             if rounded is not None:
                 result, joints, patches = rounded
                 smoothed = True
@@ -396,7 +416,7 @@ class Planner:
                     velocities=timing[1], accelerations=timing[2], validation=result,
                     smoothed=smoothed)
 
-    def _promising(self, s, g, clearance, termination):
+    def _promising(self, s, g, clearance, termination, world=None):
         """The first path of the two most promising searches that validates,
         each local search given ``retries.promising_nodes``: the least-cost path on the
         node graph, crossing any gates (:meth:`~.local_planning.LocalPlanner.plan`
@@ -406,7 +426,9 @@ class Planner:
         The first search's estimate is only the straight length to the
         goal, so it takes long where the shortest path goes far around; the
         second's patches can be narrow where repairs take long; either way
-        the global paths then take over.
+        the global paths then take over.  In a scene (``world``) the first
+        search has no budget: it is the one that goes wherever the scene
+        leaves a way.
 
         Returns
         -------
@@ -415,20 +437,21 @@ class Planner:
             its validation, legs and waypoint patches.
         """
         budget = self.retries.promising_nodes
-        if budget == 0:
+        if budget == 0 and world is None:
             return None
         try:
             result, joints, patches, route = self._repaired_path(
-                None, s, g, clearance, self.clearance_weight, termination, budget)
+                None, s, g, clearance, self.clearance_weight, termination,
+                None if world is not None else budget, world)
         except (InfeasiblePathError, PlanningTimeoutError):
             result = None
         if result is None or not result.ok:
             route = self.local.cheapest_patches(s.patch, s.cell, g.patch, g.cell, clearance)
-            if route is None:
+            if route is None or budget == 0:
                 return None
             try:
                 result, joints, patches = self._validated_path(
-                    GlobalPath(route, 0.0), s, g, clearance, termination, budget)
+                    GlobalPath(route, 0.0), s, g, clearance, termination, budget, world)
             except (InfeasiblePathError, PlanningTimeoutError):
                 return None
             if not result.ok:
@@ -452,19 +475,21 @@ class Planner:
             paths.append(path)
             yield path
 
-    def _validated_path(self, path, s, g, clearance, termination, most_settled=None):
+    def _validated_path(self, path, s, g, clearance, termination, most_settled=None,
+                        world=None):
         """Local path along a global path that passes the validator, shortcut
         where the shortcut path passes too; when every repair of the
         shortest path fails, the same for the path the paper's clearance
         weight keeps in the middle of its patches."""
         for weight in self._weights():
             result, joints, patches, _ = self._repaired_path(path, s, g, clearance, weight,
-                                                             termination, most_settled)
+                                                             termination, most_settled, world)
             if result.ok:
                 break
         return result, joints, patches
 
-    def _repaired_path(self, path, s, g, clearance, weight, termination, most_settled=None):
+    def _repaired_path(self, path, s, g, clearance, weight, termination, most_settled=None,
+                       world=None):
         """Local path along a global path (through any gates when None),
         repaired where the validator refuses it.
 
@@ -490,14 +515,16 @@ class Planner:
             try:
                 local = self.local.plan((s.patch, g.patch) if path is None else path.patches,
                                         s.cell, g.cell, blocked, clearance, weight, termination,
-                                        any_gates=path is None, most_settled=most_settled)
+                                        any_gates=path is None, most_settled=most_settled,
+                                        world=world)
             except InfeasiblePathError:
                 if not blocked:
                     raise
                 break  # the blocked cells cut the patches
             joints, patches, cells = self._waypoints(s, g, local)
             tried.append((joints, patches))
-            result, kept = self._shortcut_validated(joints, patches, s, g, clearance, keep)
+            result, kept = self._shortcut_validated(joints, patches, s, g, clearance, keep,
+                                                    world)
             if result.ok:
                 return result, joints[kept], patches[kept], _crossed(patches)
             k = self._failed_segment(result, joints[kept], patches[kept])
@@ -510,12 +537,12 @@ class Planner:
         # Blocking steps can also lead somewhere worse: the last path, else
         # the first, if it keeps min_margin.
         for joints, patches in (tried[-1], tried[0])[:len(tried)]:
-            result = self._validate(joints, s, g, self.min_margin)
+            result = self._validate(joints, s, g, self.min_margin, world)
             if result.ok:
                 break
         return result, joints, patches, _crossed(patches)
 
-    def _shortcut_validated(self, joints, patches, s, g, clearance, keep):
+    def _shortcut_validated(self, joints, patches, s, g, clearance, keep, world=None):
         """The shortcut path's validation and kept waypoints; a shortcut the
         validator refuses is replaced by shorter ones over the same cells (the
         stretch shortcut again without its direct jump), a few times, then
@@ -528,7 +555,7 @@ class Planner:
             kept = self._shortcut(joints, patches, margins, clearance)
         splits = self.retries.split_shortcuts
         for attempt in range(splits + 2):
-            result = self._validate(joints[kept], s, g, keep)
+            result = self._validate(joints[kept], s, g, keep, world)
             k = self._failed_segment(result, joints[kept], patches[kept])
             if result.ok or k < 1 or kept[k] - kept[k - 1] == 1:
                 break
@@ -566,9 +593,58 @@ class Planner:
     def _kept_margin(self, s, g, clearance):
         return max(self.min_margin, min(0.25 * clearance, abs(s.margin), abs(g.margin)))
 
-    def _validate(self, joints, s, g, min_margin):
-        return validate_path(self.roadmap.mechanism, joints, s.pose, g.pose, min_margin,
-                             self.max_step)
+    def _validate(self, joints, s, g, min_margin, world=None):
+        """The validator's verdict, and in a scene the continuous collision
+        check's: a path that collides fails at the segment where it does."""
+        mechanism = self.roadmap.mechanism
+        result = validate_path(mechanism, joints, s.pose, g.pose, min_margin, self.max_step)
+        if not result.ok or world is None:
+            return result
+        from ..world import path_collisions  # the world's kernels load only with a scene
+
+        hit = path_collisions(mechanism, world.scene, joints, s.pose, world.index.model)
+        if hit is None:
+            return result
+        return dataclasses.replace(result, ok=False, reason=f"collision {hit.message}",
+                                   failed_segment=min(int(hit.index) + 1, len(joints) - 1))
+
+    def _check_free(self, world, location, which):
+        """Raise ``CollisionError`` when a located configuration collides or
+        breaks a limit of the scene."""
+        from ..world import configuration_collision
+
+        hit = configuration_collision(self.roadmap.mechanism, world.scene, location.joints,
+                                      location.pose, world.index.model)
+        if hit is not None:
+            raise CollisionError(f"the {which} is blocked: {hit.message}")
+
+    def apply_scene(self, scene, model=None):
+        """The roadmap restricted to a scene, for :meth:`plan`'s ``world``.
+
+        The first call for a body model computes what every scene reads
+        (:class:`~rpr3_gwr_core.world.WorldIndex`: about a second on the
+        paper's slice, ten on a full 3-DOF roadmap) and keeps it; each
+        scene then takes tenths of a second, without the field or the gates
+        being computed again.
+
+        Parameters
+        ----------
+        scene : Scene
+        model : BodyModel, optional
+            Widths and layers of the bodies (default: each leg in a layer of
+            its own).
+
+        Returns
+        -------
+        SceneRoadmap
+        """
+        from ..world import WorldIndex
+
+        key = None if model is None else repr(model)
+        index = self._world_indices.get(key)
+        if index is None:
+            index = self._world_indices[key] = WorldIndex(self.roadmap, model)
+        return index.apply(scene)
 
     def _waypoints(self, s, g, local):
         """Exact start, the cell centres, exact goal; repeated points dropped;
@@ -631,7 +707,7 @@ class Planner:
                              np.asarray(patches, dtype=np.int64), margins, clearance, split,
                              self._sheets)
 
-    def _round(self, joints, patches, s, g, clearance, keep):
+    def _round(self, joints, patches, s, g, clearance, keep, world=None):
         """The path with its corners cut (Chaikin) where the cut keeps to the
         corner's patch and the margin the stretch keeps; corners next to
         where the validator refuses the cut path are put back, a few times.
@@ -654,7 +730,7 @@ class Planner:
             if not corners.any():
                 return None
             rounded, origin = cut_corners(joints, corners)
-            result = self._validate(rounded, s, g, keep)
+            result = self._validate(rounded, s, g, keep, world)
             if result.ok:
                 return result, rounded, patches[origin]
             k = max(result.failed_segment, 1)

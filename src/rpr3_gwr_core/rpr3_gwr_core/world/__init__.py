@@ -1,0 +1,32 @@
+"""The world around a mechanism: its bodies, a scene of obstacles and
+limits, the collision kernel, and the roadmap restricted to a scene.
+
+Names are loaded on first use (PEP 562): the mechanisms import
+:mod:`.bodies`, and :mod:`.collision` imports the mechanisms' continuation.
+"""
+
+import importlib
+
+_SOURCES = {
+    ".bodies": ("Bodies", "BodyModel", "assemble_bodies", "body_model_from_dict"),
+    ".collision": ("Collision", "SceneArrays", "check_bodies", "compile_scene",
+                   "configuration_collision", "path_collisions"),
+    ".scene": ("EMPTY_SCENE", "DiscObstacle", "Limits", "PolygonObstacle", "Scene",
+               "load_scene", "scene_from_dict"),
+    ".scene_roadmap": ("SceneFeasibility", "SceneRoadmap", "WorldIndex", "scene_roadmap"),
+}
+_SOURCE_OF = {name: module for module, names in _SOURCES.items() for name in names}
+
+__all__ = [name for names in _SOURCES.values() for name in names]
+
+
+def __getattr__(name):
+    if name not in _SOURCE_OF:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(_SOURCE_OF[name], __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))
