@@ -58,10 +58,8 @@ FULL_EXAMPLES = [((27.5, 31.67154934, 2.14117832, D(-101.0)),
 
 def _request(k, examples=EXAMPLES):
     start, goal = examples[k % len(examples)]
-    return PlanPath.Request(start=Configuration(rho1=start[0], rho2=start[1], rho3=start[2],
-                                                alpha=start[3]),
-                            goal=Configuration(rho1=goal[0], rho2=goal[1], rho3=goal[2],
-                                               alpha=goal[3]))
+    return PlanPath.Request(start=Configuration(positions=list(start[:3]), mode=start[3]),
+                            goal=Configuration(positions=list(goal[:3]), mode=goal[3]))
 
 
 def _call(client, request, timeout=60.0):

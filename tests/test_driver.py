@@ -10,6 +10,7 @@ import time
 
 import numpy as np
 import pytest
+import yaml
 from builtin_interfaces.msg import Duration
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from hypothesis import HealthCheck, given, settings, strategies as st
@@ -82,9 +83,9 @@ class DriverUnderTest:
         assert self.reset_client.wait_for_service(timeout_sec=TIMEOUT)
         assert self.action_client.wait_for_server(timeout_sec=TIMEOUT)
 
-    def reset(self, configuration):
-        c = Configuration(rho1=configuration[0], rho2=configuration[1], rho3=configuration[2],
-                          alpha=configuration[3])
+    def reset(self, configuration, names=()):
+        c = Configuration(joint_names=list(names), positions=list(configuration[:-1]),
+                          mode=configuration[-1])
         return _wait(self.reset_client.call_async(ResetDriver.Request(configuration=c)))
 
     def send(self, trajectory):
@@ -268,7 +269,7 @@ def test_the_mechanism_markers_have_the_legs_of_the_joint_states(rig):
         executor.shutdown()
         listener.destroy_node()
     assert len(pairs) >= 5, "no marker array with the stamp of a joint state"
-    base = rig.driver.geometry.base
+    base = rig.driver.mechanism.base
     for state, array in pairs:
         by_name = {m.ns: m for m in array.markers}
         assert {m.header.frame_id for m in array.markers} == {"base"}
@@ -282,19 +283,23 @@ def test_the_mechanism_markers_have_the_legs_of_the_joint_states(rig):
         np.testing.assert_allclose(corners[3], corners[0])
 
 
-def test_the_driver_takes_the_builders_geometry_parameters(ros_context):
+def test_the_driver_takes_the_builders_mechanism_file(ros_context, tmp_path):
     geometry = ThreeRPR(d1=16.0)
+    path = tmp_path / "d1_16.yaml"
+    path.write_text(yaml.safe_dump({
+        "mechanism": geometry.to_dict(),
+        "joints": [{"name": n, "min": 0.0, "max": 50.0, "step": 0.5} for n in NAMES]}))
     pose = (5.0, 16.0, 2.0)
     start = [*geometry.inverse(pose), pose[2]]
-    driver = Rpr3Driver(context=ros_context, parameter_overrides=[
-        Parameter("d1", value=16.0), Parameter("initial_configuration", value=start)])
-    builder = RoadmapBuilder(context=ros_context)
+    overrides = [Parameter("mechanism_file", value=str(path))]
+    driver = Rpr3Driver(context=ros_context, parameter_overrides=overrides + [
+        Parameter("initial_configuration", value=start)])
+    builder = RoadmapBuilder(context=ros_context, parameter_overrides=overrides)
     try:
-        names = ("a1", "a2", "a3", "d1", "d3", "beta")
-        assert all(driver.has_parameter(n) and builder.has_parameter(n) for n in names)
-        assert driver.geometry.d1 == 16.0
+        assert driver.mechanism == builder.mechanism == geometry
         np.testing.assert_allclose(driver.state()[1], pose)
-        assert driver.describe_parameter("d1").read_only
+        assert driver.describe_parameter("mechanism_file").read_only
+        assert builder.describe_parameter("mechanism_file").read_only
     finally:
         driver.destroy_node()
         builder.destroy_node()
@@ -312,9 +317,13 @@ outcomes = collections.Counter()
 @settings(max_examples=150, deadline=None, database=None,
           suppress_health_check=[HealthCheck.too_slow])
 @given(configuration=st.one_of(st.tuples(st.just(17.0), number, number, angle),
-                               st.tuples(number, number, number, angle)))
-def test_fuzzed_resets_get_a_code(rig, configuration):
-    response = rig.reset(configuration)
+                               st.tuples(number, number, number, angle),
+                               st.tuples(number, angle), st.tuples(number, number, number,
+                                                                   number, angle)),
+       names=st.one_of(st.just([]), st.just([]), st.permutations(NAMES),
+                       st.lists(st.sampled_from(NAMES + ["theta1", "th1", ""]), max_size=4)))
+def test_fuzzed_resets_get_a_code(rig, configuration, names):
+    response = rig.reset(configuration, names)
     assert response.error_code in RESET_CODES
     assert response.success == (response.error_code == ResetDriver.Response.ERROR_NONE)
     assert response.success or response.error_msg

@@ -16,9 +16,9 @@ def test_the_package_ships_the_designed_interfaces():
     assert _interfaces() == [
         ("action", "ExecuteTrajectory"),
         ("msg", "AxisLinks"), ("msg", "Configuration"), ("msg", "Cusp"), ("msg", "FixedJoint"),
-        ("msg", "Gate"),
-        ("msg", "Geometry"), ("msg", "GlobalPath"), ("msg", "Grid"), ("msg", "GridAxis"),
-        ("msg", "NSolutionField"), ("msg", "PlatformPose"), ("msg", "WorkspacePatch"),
+        ("msg", "Gate"), ("msg", "GlobalPath"), ("msg", "Grid"), ("msg", "GridAxis"),
+        ("msg", "Mechanism"), ("msg", "MechanismParameter"), ("msg", "NSolutionField"),
+        ("msg", "PlatformPose"), ("msg", "WorkspacePatch"),
         ("msg", "WorkspaceRoadmap"),
         ("srv", "PlanPath"), ("srv", "ResetDriver"),
     ]

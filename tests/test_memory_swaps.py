@@ -39,8 +39,8 @@ D = math.radians
 
 def _request(rho1, legs, alphas):
     return PlanPath.Request(
-        start=Configuration(rho1=rho1, rho2=legs[0], rho3=legs[1], alpha=D(alphas[0])),
-        goal=Configuration(rho1=rho1, rho2=legs[0], rho3=legs[1], alpha=D(alphas[1])),
+        start=Configuration(positions=[rho1, legs[0], legs[1]], mode=D(alphas[0])),
+        goal=Configuration(positions=[rho1, legs[0], legs[1]], mode=D(alphas[1])),
         smooth=True)
 
 
@@ -108,14 +108,15 @@ class _Swapper:
         planned on it and they are ready."""
         workers = children(self.planner.pid)
         if rho1 is not None:
-            result = _result(self.parameters.set_parameters([Parameter("rho1", value=rho1)]))
+            result = _result(self.parameters.set_parameters([Parameter("fixed_value",
+                                                                       value=rho1)]))
             assert result.results[0].successful, result.results[0].reason
         rho1 = 17.0 if rho1 is None else rho1
         deadline = time.monotonic() + TIMEOUT
         while True:
             response = _result(self.plan.call_async(REQUESTS[rho1]))
             stamp = (response.roadmap_stamp.sec, response.roadmap_stamp.nanosec)
-            if response.roadmap_rho1 == rho1 and stamp != self.stamp:
+            if list(response.roadmap_fixed_values) == [rho1] and stamp != self.stamp:
                 break
             assert time.monotonic() < deadline, f"the planner never planned at rho1 = {rho1}"
             time.sleep(0.05)

@@ -27,8 +27,8 @@ PLANNER = (pathlib.Path(__file__).resolve().parents[1] / "ros2_ws" / "install" /
            / "lib" / "rpr3_gwr_nodes" / "planner")
 D = math.radians
 REQUEST = PlanPath.Request(
-    start=Configuration(rho1=17.0, rho2=12.0, rho3=18.0, alpha=D(122.82)),
-    goal=Configuration(rho1=17.0, rho2=10.0, rho3=25.0, alpha=D(-24.24)), smooth=True)
+    start=Configuration(positions=[17.0, 12.0, 18.0], mode=D(122.82)),
+    goal=Configuration(positions=[17.0, 10.0, 25.0], mode=D(-24.24)), smooth=True)
 
 
 @contextlib.contextmanager

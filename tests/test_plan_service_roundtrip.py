@@ -21,11 +21,13 @@ def _answer(request, response):
     response.trajectory.joint_names = ["rho1", "rho2", "rho3"]
     for k in range(3):
         point = JointTrajectoryPoint()
-        point.positions = [request.start.rho1, request.start.rho2 + k, request.start.rho3 - k]
+        rho1, rho2, rho3 = request.start.positions
+        point.positions = [rho1, rho2 + k, rho3 - k]
         point.velocities = [0.0, 0.5 * k, -0.5 * k]
         point.time_from_start = Duration(sec=k, nanosec=250_000_000)
         response.trajectory.points.append(point)
-    response.poses = [PlatformPose(x=1.0 * k, y=-2.0 * k, alpha=request.goal.alpha)
+    response.poses = [PlatformPose(names=["x", "y", "alpha"],
+                                   values=[1.0 * k, -2.0 * k, request.goal.mode])
                       for k in range(3)]
     response.min_singularity_margin = 0.0267
     return response
@@ -42,10 +44,11 @@ def test_plan_request_and_response_cross_dds_intact(ros_context):
         executor.add_node(client_node)
         assert client.wait_for_service(timeout_sec=10.0)
         request = PlanPath.Request()
-        request.start.rho1, request.start.rho2, request.start.rho3 = 17.0, 12.0, 18.0
-        request.start.alpha = math.radians(122.82)
-        request.goal.rho1, request.goal.rho2, request.goal.rho3 = 17.0, 10.0, 25.0
-        request.goal.alpha = math.radians(-24.24)
+        request.start.joint_names = ["rho1", "rho2", "rho3"]
+        request.start.positions = [17.0, 12.0, 18.0]
+        request.start.mode = math.radians(122.82)
+        request.goal.positions = [17.0, 10.0, 25.0]
+        request.goal.mode = math.radians(-24.24)
         request.smooth = True
         request.max_velocity, request.max_acceleration = 2.0, 4.0
         future = client.call_async(request)
@@ -61,8 +64,9 @@ def test_plan_request_and_response_cross_dds_intact(ros_context):
             [17.0, 12.0, 18.0], [17.0, 13.0, 17.0], [17.0, 14.0, 16.0]]
         assert response.trajectory.points[2].time_from_start == Duration(sec=2,
                                                                          nanosec=250_000_000)
-        assert [p.alpha for p in response.poses] == [request.goal.alpha] * 3
-        assert response.poses[2].y == -4.0 and response.min_singularity_margin == 0.0267
+        assert [p.values[2] for p in response.poses] == [request.goal.mode] * 3
+        assert list(response.poses[2].names) == ["x", "y", "alpha"]
+        assert response.poses[2].values[1] == -4.0 and response.min_singularity_margin == 0.0267
     finally:
         executor.shutdown()
         server.destroy_node()

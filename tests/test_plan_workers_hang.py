@@ -30,8 +30,8 @@ from process_tree import children, running, wait_for_children
 
 D = math.radians
 REQUEST = PlanPath.Request(
-    start=Configuration(rho1=17.0, rho2=12.0, rho3=18.0, alpha=D(122.82)),
-    goal=Configuration(rho1=17.0, rho2=10.0, rho3=25.0, alpha=D(-24.24)), smooth=True)
+    start=Configuration(positions=[17.0, 12.0, 18.0], mode=D(122.82)),
+    goal=Configuration(positions=[17.0, 10.0, 25.0], mode=D(-24.24)), smooth=True)
 WORKERS = 2
 CLIENTS = 4
 # Length of the load after a stop [s].

@@ -39,8 +39,20 @@ CODES = {getattr(PlanPath.Response, name): name for name in dir(PlanPath.Respons
 FUZZ_REQUESTS = 500
 
 
-def _configuration(values):
-    return Configuration(rho1=values[0], rho2=values[1], rho3=values[2], alpha=values[3])
+NAMES = ["rho1", "rho2", "rho3"]
+
+
+def _configuration(values, names=()):
+    """Joints (in the order of ``names``, else the 3-RPR's) then alpha."""
+    return Configuration(joint_names=list(names), positions=list(values[:-1]), mode=values[-1])
+
+
+def _joints(configuration):
+    """The legs of a valid configuration message, in the 3-RPR's order."""
+    if not configuration.joint_names:
+        return list(configuration.positions)
+    by_name = dict(zip(configuration.joint_names, configuration.positions))
+    return [by_name[name] for name in NAMES]
 
 
 class PlannerUnderTest:
@@ -111,7 +123,9 @@ def check_sound(request, response, stamp, default_limits):
     ``default_max_velocity`` and ``default_max_acceleration``."""
     assert response.error_code in CODES, response.error_code
     if response.error_code != PlanPath.Response.ERROR_NO_ROADMAP:
-        assert response.roadmap_stamp == stamp.stamp and response.roadmap_rho1 == 17.0
+        assert response.roadmap_stamp == stamp.stamp
+        assert list(response.roadmap_fixed_joints) == ["rho1"]
+        assert list(response.roadmap_fixed_values) == [17.0]
     if not response.success:
         assert response.error_code != PlanPath.Response.ERROR_NONE and response.error_msg
         assert not response.trajectory.points
@@ -125,18 +139,18 @@ def check_sound(request, response, stamp, default_limits):
     numbers = np.array([list(p.positions) + list(p.velocities) + list(p.accelerations)
                         for p in points])
     assert numbers.shape[1] == 9 and np.all(np.isfinite(numbers))
-    assert all(math.isfinite(v) for p in response.poses for v in (p.x, p.y, p.alpha))
+    assert all(list(p.names) == ["x", "y", "alpha"] for p in response.poses)
+    assert all(math.isfinite(v) for p in response.poses for v in p.values)
+    assert list(response.trajectory.joint_names) == NAMES
     nanoseconds = [p.time_from_start.sec * 10**9 + p.time_from_start.nanosec for p in points]
     assert nanoseconds[0] == 0 and all(b > a for a, b in zip(nanoseconds, nanoseconds[1:]))
     start, goal = request.start, request.goal
-    np.testing.assert_allclose(points[0].positions, [start.rho1, start.rho2, start.rho3],
-                               rtol=0, atol=1e-9)
-    np.testing.assert_allclose(points[-1].positions, [goal.rho1, goal.rho2, goal.rho3],
-                               rtol=0, atol=1e-9)
+    np.testing.assert_allclose(points[0].positions, _joints(start), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(points[-1].positions, _joints(goal), rtol=0, atol=1e-9)
     # A second, independent continuation, in pose space, follows the
     # trajectory from the pose it starts at to the one it ends at, keeping
     # one sign of det Jx and the planner's margin threshold.
-    poses = np.array([[p.x, p.y, p.alpha] for p in response.poses])
+    poses = np.array([list(p.values) for p in response.poses])
     np.testing.assert_allclose(legs_of(poses[0]), numbers[0, :3], rtol=0, atol=1e-7)
     followed = follow(numbers[:, :3], poses[0], 1e-3 * (1 - 1e-3))
     assert followed["ok"], followed["why"]
@@ -229,10 +243,39 @@ def test_no_limits_take_the_default_limits_as_the_interface_says(service):
 def test_the_response_names_the_roadmap_that_answered(service):
     response = service.plan(MODE_A, MODE_B)
     assert response.success, response.error_msg
-    assert response.roadmap_stamp == service.stamp.stamp and response.roadmap_rho1 == 17.0
+    assert response.roadmap_stamp == service.stamp.stamp
+    assert list(response.roadmap_fixed_joints) == ["rho1"]
+    assert list(response.roadmap_fixed_values) == [17.0]
     failed = service.plan((13.0, 12.0, 18.0, 0.0), Q2)
     assert failed.error_code == PlanPath.Response.ERROR_RHO1_MISMATCH
-    assert failed.roadmap_rho1 == 17.0
+    assert list(failed.roadmap_fixed_values) == [17.0]
+
+
+def test_joints_may_come_by_name_in_any_order(service):
+    reordered = [2, 0, 1]
+    start = PlanPath.Request(start=_configuration(
+        [Q1[k] for k in reordered] + [Q1[3]], [NAMES[k] for k in reordered]),
+        goal=_configuration(Q2))
+    response = service.call(start)
+    assert response.success, response.error_msg
+    np.testing.assert_allclose(response.trajectory.points[0].positions, Q1[:3], rtol=0,
+                               atol=1e-9)
+
+
+@pytest.mark.parametrize("configuration, reason", [
+    (Configuration(positions=[17.0, 12.0], mode=Q1[3]), "3 positions"),
+    (Configuration(positions=[17.0, 12.0, 18.0, 1.0], mode=Q1[3]), "3 positions"),
+    (Configuration(joint_names=["th1", "th2", "th3"], positions=Q1[:3], mode=Q1[3]),
+     "are not the 3-RPR's"),
+    (Configuration(joint_names=["rho1", "rho1", "rho3"], positions=Q1[:3], mode=Q1[3]),
+     "are not the 3-RPR's"),
+    (Configuration(joint_names=["rho1", "rho2"], positions=Q1[:3], mode=Q1[3]),
+     "are not the 3-RPR's"),
+])
+def test_a_configuration_of_other_joints_is_an_invalid_input(service, configuration, reason):
+    response = service.call(PlanPath.Request(start=configuration, goal=_configuration(Q2)))
+    assert response.error_code == PlanPath.Response.ERROR_INVALID_INPUT, response.error_msg
+    assert reason in response.error_msg
 
 
 def test_each_plan_is_drawn_for_rviz(service):
@@ -249,7 +292,7 @@ def test_each_plan_is_drawn_for_rviz(service):
     np.testing.assert_allclose([[p.x, p.y] for p in by_name["joint_path"].points],
                                [p.positions[1:] for p in response.trajectory.points])
     np.testing.assert_allclose([[p.x, p.y] for p in by_name["platform_path"].points],
-                               [[p.x, p.y] for p in response.poses])
+                               [p.values[:2] for p in response.poses])
     assert by_name["platform_path"].header.frame_id == "base"
     assert by_name["joint_path"].header.frame_id == "joint_space"
 
@@ -281,6 +324,26 @@ def configurations(draw):
 
 
 @st.composite
+def configuration_messages(draw):
+    """Mostly a configuration in the 3-RPR's order; else its joints by name
+    in any order, too few or too many positions, or names of other joints."""
+    values = draw(configurations())
+    kind = draw(st.sampled_from(["ordered", "ordered", "ordered", "named", "count", "names"]))
+    if kind == "ordered":
+        return _configuration(values)
+    if kind == "named":
+        order = draw(st.permutations(range(3)))
+        return _configuration([values[k] for k in order] + [values[3]],
+                              [NAMES[k] for k in order])
+    if kind == "count":
+        count = draw(st.sampled_from([0, 1, 2, 4, 7]))
+        return Configuration(positions=(list(values[:3]) * 3)[:count], mode=values[3])
+    names = draw(st.lists(st.sampled_from(NAMES + ["th1", "", "rho4", "x"]), min_size=0,
+                          max_size=4))
+    return _configuration(values, names)
+
+
+@st.composite
 def limits(draw):
     """Both 0 (the defaults), both sound, or anything."""
     kind = draw(st.sampled_from(["defaults", "sound", "sound", "anything"]))
@@ -294,8 +357,8 @@ def limits(draw):
 def requests(draw):
     max_velocity, max_acceleration = draw(limits())
     return PlanPath.Request(
-        start=_configuration(draw(configurations())), goal=_configuration(draw(configurations())),
-        alpha_tolerance=draw(st.one_of(st.just(0.0), st.just(0.0), st.floats(1e-4, 0.2),
+        start=draw(configuration_messages()), goal=draw(configuration_messages()),
+        mode_tolerance=draw(st.one_of(st.just(0.0), st.just(0.0), st.floats(1e-4, 0.2),
                                        hostile)),
         smooth=draw(st.booleans()), weighted=draw(st.booleans()),
         feasibility_only=draw(st.booleans()),

@@ -10,8 +10,12 @@ from rpr3_gwr_core import (PAPER_GEOMETRY, PAPER_GRID, Axis, Grid, Planner, Plan
                            build_roadmap)
 from rpr3_gwr_core.io.export import roadmap_from_json, roadmap_to_json
 from rpr3_gwr_core.exceptions import InvalidInputError
+from rpr3_gwr_core.mechanisms import (DEFAULT_FIVE_BAR, DEFAULT_THREE_PRR, DEFAULT_THREE_RRR,
+                                      PAPER_GEOMETRY as PAPER_3RPR)
 from rpr3_gwr_core.workspace.cusps import find_cusps
-from rpr3_gwr_nodes.conversions import roadmap_from_msgs, roadmap_to_msgs
+from rpr3_gwr_msgs.msg import Configuration
+from rpr3_gwr_nodes.conversions import (configuration_from_msg, mechanism_from_msg,
+                                        mechanism_to_msg, roadmap_from_msgs, roadmap_to_msgs)
 from std_msgs.msg import Header
 
 D = math.radians
@@ -68,7 +72,7 @@ def test_decoded_roadmaps_plan_identically(built, decoded, start, goal):
 
 def test_the_field_message_carries_the_cusps(built):
     field_msg, _ = roadmap_to_msgs(built, Header())
-    assert [list(c.legs) for c in field_msg.cusps] == [c.joints.tolist()
+    assert [list(c.joints) for c in field_msg.cusps] == [c.joints.tolist()
                                                         for c in find_cusps(built)]
     assert len(field_msg.cusps) == 6 and all(c.regions for c in field_msg.cusps)
 
@@ -119,3 +123,41 @@ def test_a_grid_crosses_as_a_message_with_its_periodic_axes(grid):
     msg = grid_to_msg(grid)
     assert [a.periodic for a in msg.axes] == [a.periodic for a in grid.axes]
     assert grid_from_msg(msg) == grid
+
+
+@pytest.mark.parametrize("mechanism", [PAPER_3RPR, DEFAULT_FIVE_BAR, DEFAULT_THREE_RRR,
+                                       DEFAULT_THREE_PRR], ids=lambda m: m.kind)
+def test_every_mechanism_crosses_as_a_message(mechanism):
+    msg = mechanism_to_msg(mechanism)
+    assert msg.kind == mechanism.kind and list(msg.joint_names) == list(mechanism.joint_names)
+    assert list(msg.pose_names) == list(mechanism.pose_names)
+    assert mechanism_from_msg(msg) == mechanism
+
+
+@pytest.mark.parametrize("damage, reason", [
+    (lambda m: setattr(m, "kind", "7R"), "unknown mechanism kind"),
+    (lambda m: setattr(m, "joint_names", ["a", "b", "c"]), "not the 3-RPR's"),
+    (lambda m: setattr(m, "mode_coordinate", 0), "not the 3-RPR's"),
+    (lambda m: m.parameters.append(m.parameters[0]), "named twice"),
+    (lambda m: setattr(m, "parameters", m.parameters[1:]), "malformed"),
+    (lambda m: setattr(m.parameters[0], "values", [1.0]), "malformed"),
+    (lambda m: setattr(m.parameters[3], "values", [math.nan]), "finite"),
+])
+def test_a_malformed_mechanism_message_is_refused(damage, reason):
+    msg = mechanism_to_msg(PAPER_3RPR)
+    damage(msg)
+    with pytest.raises(InvalidInputError, match=reason):
+        mechanism_from_msg(msg)
+
+
+def test_a_configuration_takes_its_joints_by_name_or_in_order():
+    ordered = Configuration(positions=[17.0, 12.0, 18.0], mode=2.0)
+    named = Configuration(joint_names=["rho3", "rho1", "rho2"], positions=[18.0, 17.0, 12.0],
+                          mode=2.0)
+    assert configuration_from_msg(PAPER_3RPR, ordered) == (17.0, 12.0, 18.0, 2.0)
+    assert configuration_from_msg(PAPER_3RPR, named) == (17.0, 12.0, 18.0, 2.0)
+    for bad in (Configuration(positions=[17.0, 12.0], mode=2.0),
+                Configuration(joint_names=["rho1", "rho1", "rho2"], positions=[1.0] * 3),
+                Configuration(joint_names=["th1", "th2", "th3"], positions=[1.0] * 3)):
+        with pytest.raises(InvalidInputError):
+            configuration_from_msg(PAPER_3RPR, bad)

@@ -44,7 +44,7 @@ def _singular_configuration(alpha=0.5):
 
 
 def _configuration(values):
-    return Configuration(rho1=values[0], rho2=values[1], rho3=values[2], alpha=values[3])
+    return Configuration(positions=list(values[:3]), mode=values[3])
 
 
 def _wait(future, timeout=TIMEOUT):
@@ -153,7 +153,7 @@ def test_paper_first_example_through_the_service(suite):
     assert regions(response) == [[6, 4, 2, 1], [6, 5, 2, 1]]
     assert list(response.trajectory.joint_names) == ["rho1", "rho2", "rho3"]
     assert len(response.poses) == len(response.trajectory.points) >= 2
-    assert abs(response.poses[-1].alpha - Q2[3]) < D(0.05)
+    assert abs(response.poses[-1].values[2] - Q2[3]) < D(0.05)
     assert response.min_singularity_margin > 1e-3
 
 
@@ -161,8 +161,8 @@ def test_paper_mode_change_through_the_service(suite):
     response = suite.plan(MODE_A, MODE_B)
     assert response.success, response.error_msg
     assert [[p // 10 for p in g.patch_ids] for g in response.global_paths][0] == [3, 1, 3]
-    assert abs(response.poses[0].alpha - MODE_A[3]) < D(0.05)
-    assert abs(response.poses[-1].alpha - MODE_B[3]) < D(0.05)
+    assert abs(response.poses[0].values[2] - MODE_A[3]) < D(0.05)
+    assert abs(response.poses[-1].values[2] - MODE_B[3]) < D(0.05)
 
 
 def test_whole_chain_plan_execute_record(suite):
@@ -172,7 +172,7 @@ def test_whole_chain_plan_execute_record(suite):
     before = len(suite.joint_states)
     result = suite.execute(response.trajectory)
     assert result.error_code == ExecuteTrajectory.Result.SUCCESS, result.error_msg
-    assert abs(result.final_pose.alpha - Q2[3]) < D(0.05)
+    assert abs(result.final_pose.values[2] - Q2[3]) < D(0.05)
     assert result.min_singularity_margin > 1e-3
     # Joint states of the whole motion arrive, ending at the goal's legs.
     def at_goal():

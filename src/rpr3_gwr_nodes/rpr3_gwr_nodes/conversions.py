@@ -15,20 +15,21 @@ import array
 import numpy as np
 from builtin_interfaces.msg import Duration
 from rpr3_gwr_core.exceptions import InvalidInputError
-from rpr3_gwr_core.mechanisms import ThreeRPR
+from rpr3_gwr_core.mechanisms import mechanism_from_dict
 from rpr3_gwr_core.workspace import (AdaptiveGrid, Axis, Grid, NSolutionField, Roadmap,
                                      Segmentation, roadmap_graph)
 from rpr3_gwr_core.workspace.cusps import known_cusps
-from rpr3_gwr_msgs.msg import AxisLinks, FixedJoint, GridAxis, PlatformPose
+from rpr3_gwr_msgs.msg import AxisLinks, FixedJoint, GridAxis, MechanismParameter, PlatformPose
 from rpr3_gwr_msgs.msg import Cusp as CuspMsg
 from rpr3_gwr_msgs.msg import Gate as GateMsg
-from rpr3_gwr_msgs.msg import Geometry as GeometryMsg
 from rpr3_gwr_msgs.msg import Grid as GridMsg
+from rpr3_gwr_msgs.msg import Mechanism as MechanismMsg
 from rpr3_gwr_msgs.msg import NSolutionField as NSolutionFieldMsg
 from rpr3_gwr_msgs.msg import WorkspacePatch, WorkspaceRoadmap
 
-__all__ = ["MAX_DURATION", "duration_msg", "geometry_to_msg", "geometry_from_msg",
-           "grid_to_msg", "grid_from_msg", "roadmap_to_msgs", "roadmap_from_msgs"]
+__all__ = ["MAX_DURATION", "duration_msg", "mechanism_to_msg", "mechanism_from_msg",
+           "pose_msg", "configuration_from_msg", "grid_to_msg", "grid_from_msg",
+           "roadmap_to_msgs", "roadmap_from_msgs"]
 
 # builtin_interfaces/Duration holds int32 seconds.
 MAX_DURATION = 2**31 - 1
@@ -63,14 +64,72 @@ def _unpack(values, dtype, size, name):
     return data
 
 
-def geometry_to_msg(geometry):
-    return GeometryMsg(a1=list(geometry.a1), a2=list(geometry.a2), a3=list(geometry.a3),
-                       d1=geometry.d1, d3=geometry.d3, beta=geometry.beta)
+def mechanism_to_msg(mechanism):
+    """A core mechanism as a rpr3_gwr_msgs/Mechanism: its document
+    (``Mechanism.to_dict``), numbers as one value and points as their
+    coordinates, with its joint and pose names."""
+    document = mechanism.to_dict()
+    return MechanismMsg(
+        kind=document.pop("kind"),
+        parameters=[MechanismParameter(name=name, values=[float(v) for v in np.ravel(value)])
+                    for name, value in document.items()],
+        joint_names=list(mechanism.joint_names), pose_names=list(mechanism.pose_names),
+        mode_coordinate=mechanism.mode_coordinate)
 
 
-def geometry_from_msg(msg):
-    return ThreeRPR(a1=tuple(msg.a1), a2=tuple(msg.a2), a3=tuple(msg.a3), d1=msg.d1, d3=msg.d3,
-                    beta=msg.beta)
+def mechanism_from_msg(msg):
+    """Inverse of :func:`mechanism_to_msg`.
+
+    Raises
+    ------
+    InvalidInputError
+        If the kind is unknown, a parameter is named twice or malformed, or
+        the names and mode coordinate are not the kind's.
+    """
+    names = [p.name for p in msg.parameters]
+    if len(set(names)) != len(names):
+        raise InvalidInputError(f"mechanism message: a parameter is named twice in {names}")
+    document = {p.name: float(p.values[0]) if len(p.values) == 1 else
+                [float(v) for v in p.values] for p in msg.parameters}
+    mechanism = mechanism_from_dict(dict(document, kind=msg.kind))
+    given = (list(msg.joint_names), list(msg.pose_names), msg.mode_coordinate)
+    if given != (list(mechanism.joint_names), list(mechanism.pose_names),
+                 mechanism.mode_coordinate):
+        raise InvalidInputError(
+            f"mechanism message: joints {given[0]}, pose {given[1]} and mode coordinate "
+            f"{given[2]} are not the {mechanism.kind}'s {list(mechanism.joint_names)}, "
+            f"{list(mechanism.pose_names)} and {mechanism.mode_coordinate}")
+    return mechanism
+
+
+def pose_msg(mechanism, pose):
+    """A pose (shape ``(pose_size,)``) as a rpr3_gwr_msgs/PlatformPose."""
+    return PlatformPose(names=list(mechanism.pose_names), values=[float(v) for v in pose])
+
+
+def configuration_from_msg(mechanism, msg):
+    """A rpr3_gwr_msgs/Configuration as the core's ``(*joints, mode)``, the
+    joints in the mechanism's order; values are not checked here (the core
+    checks them where it takes them).
+
+    Raises
+    ------
+    InvalidInputError
+        If there is not one position per joint, or the names are not the
+        mechanism's joints (each once, in any order).
+    """
+    names, positions = list(msg.joint_names), list(msg.positions)
+    joints = list(mechanism.joint_names)
+    if len(positions) != len(joints):
+        raise InvalidInputError(f"a configuration of the {mechanism.kind} has {len(joints)} "
+                                f"positions, for {joints}; got {len(positions)}")
+    if names:
+        if sorted(names) != sorted(joints):
+            raise InvalidInputError(f"joint names {names} are not the {mechanism.kind}'s "
+                                    f"{joints} (each once, or none for that order)")
+        by_name = dict(zip(names, positions))
+        positions = [by_name[name] for name in joints]
+    return (*positions, msg.mode)
 
 
 def grid_to_msg(grid):
@@ -122,8 +181,8 @@ def roadmap_to_msgs(roadmap, header):
     """
     seg = roadmap.segmentation
     field = seg.field
-    geometry, grid = geometry_to_msg(field.mechanism), grid_to_msg(field.grid)
-    field_msg = NSolutionFieldMsg(header=header, geometry=geometry, grid=grid,
+    mechanism, grid = mechanism_to_msg(field.mechanism), grid_to_msg(field.grid)
+    field_msg = NSolutionFieldMsg(header=header, mechanism=mechanism, grid=grid,
                                   max_solutions=field.max_solutions,
                                   pose_size=field.mechanism.pose_size)
     valid = field.valid
@@ -133,10 +192,8 @@ def roadmap_to_msgs(roadmap, header):
     field_msg.poses = _pack("d", field.poses[valid], np.float64)
     field_msg.singularity_margin = _pack("d", field.margin[valid], np.float64)
     field_msg.links = [AxisLinks(slots=_pack("b", match, np.int8)) for _, _, match in seg.links]
-    field_msg.cusps = [CuspMsg(legs=[float(v) for v in c.joints],
-                               pose=PlatformPose(x=float(c.pose[0]), y=float(c.pose[1]),
-                                                 alpha=float(c.pose[2])),
-                               regions=list(c.regions))
+    field_msg.cusps = [CuspMsg(joints=[float(v) for v in c.joints],
+                               pose=pose_msg(field.mechanism, c.pose), regions=list(c.regions))
                        for c in known_cusps(roadmap)]
     patches = [WorkspacePatch(id=p.id, region=p.region, layer=p.layer, aspect=p.aspect,
                               n_solutions=p.n_solutions, n_cells=int(p.cells.size),
@@ -144,7 +201,7 @@ def roadmap_to_msgs(roadmap, header):
                for _, p in sorted(seg.patches.items())]
     gates = [GateMsg(patch_a=a, patch_b=b, n_faces=len(g.faces), width=g.width)
              for (a, b), g in sorted(seg.gates.items())]
-    roadmap_msg = WorkspaceRoadmap(header=header, geometry=geometry, grid=grid, patches=patches,
+    roadmap_msg = WorkspaceRoadmap(header=header, mechanism=mechanism, grid=grid, patches=patches,
                                    gates=gates)
     return field_msg, roadmap_msg
 
@@ -158,11 +215,16 @@ def roadmap_from_msgs(field_msg, roadmap_msg):
     InvalidInputError
         If the messages are inconsistent or do not belong together.
     """
-    geometry, grid = geometry_from_msg(field_msg.geometry), grid_from_msg(field_msg.grid)
-    if (geometry_from_msg(roadmap_msg.geometry) != geometry
+    mechanism, grid = mechanism_from_msg(field_msg.mechanism), grid_from_msg(field_msg.grid)
+    if (mechanism_from_msg(roadmap_msg.mechanism) != mechanism
             or grid_from_msg(roadmap_msg.grid) != grid):
-        raise InvalidInputError("field and roadmap messages were built for different grids")
-    slots, size = geometry.max_solutions, geometry.pose_size
+        raise InvalidInputError("field and roadmap messages were built for different "
+                                "mechanisms or grids")
+    if any(axis.joint >= mechanism.n_joints for axis in grid.axes) or any(
+            joint >= mechanism.n_joints for joint, _ in grid.fixed):
+        raise InvalidInputError(f"grid message: a joint index beyond the {mechanism.kind}'s "
+                                f"{mechanism.n_joints} joints")
+    slots, size = mechanism.max_solutions, mechanism.pose_size
     if (field_msg.max_solutions, field_msg.pose_size) != (slots, size):
         raise InvalidInputError(f"field message: {field_msg.max_solutions} solutions of "
                                 f"{field_msg.pose_size} coordinates, the mechanism has "
@@ -181,7 +243,7 @@ def roadmap_from_msgs(field_msg, roadmap_msg):
                             "singularity_margin")
     patch = np.zeros((n, slots), np.int32)
     patch[valid] = _unpack(field_msg.patch_ids, np.int32, total, "patch_ids")
-    field = NSolutionField(mechanism=geometry, grid=grid, count=count, poses=poses,
+    field = NSolutionField(mechanism=mechanism, grid=grid, count=count, poses=poses,
                            margin=margin)
     if any(len(axis.slots) % slots for axis in field_msg.links):
         raise InvalidInputError(f"field message: links are not {slots} per face")

@@ -20,14 +20,19 @@ planned without it), writes both to a folder in the roadmap cache and starts
 node's own process until they are ready, with ``plan_workers`` 0, when a
 worker dies or hangs for the request it had, and for good once every worker
 did.  Every step of a
-request, the conversion of the answer to messages included, runs inside the
-error mapping: an error of the core becomes the response's error code and
-message, anything else ``ERROR_INTERNAL``, and the node never dies on a
-request.  Each response names the roadmap that answered it (its stamp and
-rho1).  Each planned trajectory is also published on ``planned_trajectory``
+request, the conversion of the request and of the answer to messages
+included, runs inside the error mapping: an error of the core becomes the
+response's error code and message, anything else ``ERROR_INTERNAL``, and the
+node never dies on a request.  The mechanism comes with the roadmap
+messages: requests give its joints (by name, or in its order) and mode
+coordinate, and trajectories carry its joint names.  With ``mechanism_file``
+(read-only, as the builder's) roadmaps of another mechanism are ignored;
+empty (the default), any mechanism is planned on.  Each response names the
+roadmap that answered it (its stamp and the joints it fixes).  Each planned
+trajectory is also published on ``planned_trajectory``
 (trajectory_msgs/JointTrajectory) for recording, and drawn on
 ``planned_path_markers`` (visualization_msgs/MarkerArray: the platform's
-track in ``base``, the leg path in ``joint_space``).
+track in ``base``, the joint path in ``joint_space``).
 """
 
 import math
@@ -42,19 +47,21 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallb
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rpr3_gwr_core.exceptions import GWRError, InvalidInputError
+from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
 from rpr3_gwr_core.io.paths import default_cache_dir
 from rpr3_gwr_core.planning import (DEFAULT_CLEARANCE, PlanningIndex, PlanOptions, Planner,
                                     Retries, Termination, planning_index)
-from rpr3_gwr_msgs.msg import GlobalPath, NSolutionField, PlatformPose, WorkspaceRoadmap
+from rpr3_gwr_msgs.msg import GlobalPath, NSolutionField, WorkspaceRoadmap
 from rpr3_gwr_msgs.srv import PlanPath
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from visualization_msgs.msg import MarkerArray
 
-from .conversions import MAX_DURATION, duration_msg, roadmap_from_msgs
+from .conversions import (MAX_DURATION, configuration_from_msg, duration_msg, pose_msg,
+                          roadmap_from_msgs)
 from .memory import release_free_memory, use_one_arena
 from .plan_workers import PlanWorkers, WorkerFailed, WorkersClosed
-from .profiles import BASE_FRAME, JOINT_NAMES, LATCHED_QOS, SERVICE_QOS
+from .profiles import BASE_FRAME, LATCHED_QOS, SERVICE_QOS
 from .spin import run
 from .visualization import path_markers
 
@@ -79,9 +86,9 @@ FEASIBILITY = {
 }
 
 
-def plan_to_trajectory(plan, header):
-    """A core plan's leg path as a JointTrajectory with times, velocities and
-    accelerations.
+def plan_to_trajectory(plan, joint_names, header):
+    """A core plan's joint path as a JointTrajectory of the mechanism's
+    ``joint_names`` with times, velocities and accelerations.
 
     Raises
     ------
@@ -94,7 +101,7 @@ def plan_to_trajectory(plan, header):
         raise InvalidInputError(
             f"the limits give a trajectory of {times[-1]:.3g} s, beyond the "
             f"{MAX_DURATION} s that builtin_interfaces/Duration holds: raise them")
-    trajectory = JointTrajectory(header=header, joint_names=list(JOINT_NAMES))
+    trajectory = JointTrajectory(header=header, joint_names=list(joint_names))
     for k, joints in enumerate(plan.joints):
         trajectory.points.append(JointTrajectoryPoint(
             positions=[float(v) for v in joints],
@@ -170,6 +177,12 @@ class PlannerNode(Node):
             repairs=self.get_parameter("retry_repairs").value,
             split_shortcuts=self.get_parameter("retry_split_shortcuts").value,
             detour_weight=self.get_parameter("detour_weight").value)
+        self.declare_parameter("mechanism_file", "", ParameterDescriptor(
+            description="Mechanism file (as the builder's); given, roadmaps of another "
+                        "mechanism are ignored with an error; empty, the planner plans on the "
+                        "mechanism each roadmap carries", read_only=True))
+        path = self.get_parameter("mechanism_file").value
+        self.mechanism = load_mechanism_file(path).mechanism if path else None
         self._state = None
         self._messages = {}
         updates = MutuallyExclusiveCallbackGroup()
@@ -212,6 +225,10 @@ class PlannerNode(Node):
         with numba_event.install_listener("numba:compile", _CompileNotice(self.get_logger())):
             try:
                 received = roadmap_from_msgs(field, roadmap)
+                if self.mechanism is not None and received.mechanism != self.mechanism:
+                    raise InvalidInputError(f"the roadmap is the {received.mechanism.kind}'s "
+                                            f"{received.mechanism.to_dict()}, not the "
+                                            f"mechanism file's {self.mechanism.to_dict()}")
                 # Ready at once: gate distances come with the full index, below.
                 planner = Planner(received, PlanningIndex.build(received),
                                   retries=self._retries)
@@ -230,7 +247,7 @@ class PlannerNode(Node):
         stamp = roadmap.header.stamp
         self.get_logger().info(
             f"planning on a new roadmap (stamp {stamp.sec}.{stamp.nanosec:09d}): "
-            f"{_describe(planner.roadmap.grid)}, {len(planner.roadmap.graph)} patches, ready in "
+            f"{_describe(planner.roadmap)}, {len(planner.roadmap.graph)} patches, ready in "
             f"{time.perf_counter() - start:.3f} s")
         self.indexed.clear()
         self.ready.set()
@@ -314,11 +331,11 @@ class PlannerNode(Node):
             limits = (self.get_parameter("default_max_velocity").value,
                       self.get_parameter("default_max_acceleration").value)
         limits = [None if v == 0.0 else v for v in limits]
-        tolerance = request.alpha_tolerance or math.radians(1.0)
+        tolerance = {"mode_tol": request.mode_tolerance} if request.mode_tolerance else {}
         return PlanOptions(smooth=request.smooth, weighted=request.weighted,
                            feasibility_only=request.feasibility_only, max_velocity=limits[0],
-                           max_acceleration=limits[1], mode_tol=tolerance,
-                           clearance=self.get_parameter("clearance").value)
+                           max_acceleration=limits[1],
+                           clearance=self.get_parameter("clearance").value, **tolerance)
 
     def _on_plan(self, request, response):
         state = self._state
@@ -345,8 +362,9 @@ class PlannerNode(Node):
             raise InvalidInputError(f"time_limit must be positive and finite (or 0 for the "
                                     f"planner's default), got {request.time_limit}")
         termination = Termination(begin + limit)
-        start = (request.start.rho1, request.start.rho2, request.start.rho3, request.start.alpha)
-        goal = (request.goal.rho1, request.goal.rho2, request.goal.rho3, request.goal.alpha)
+        mechanism = state.planner.roadmap.mechanism
+        start = configuration_from_msg(mechanism, request.start)
+        goal = configuration_from_msg(mechanism, request.goal)
         plan = self._plan(state, start, goal, options, termination)
         response = _named(state)
         response.feasibility = FEASIBILITY[plan.reason]
@@ -354,9 +372,9 @@ class PlannerNode(Node):
                                  for g in plan.global_paths]
         if not options.feasibility_only:
             response.path_index = plan.path_index
-            response.trajectory = plan_to_trajectory(plan, self._header())
-            response.poses = [PlatformPose(x=float(p[0]), y=float(p[1]), alpha=float(p[2]))
-                              for p in plan.poses]
+            response.trajectory = plan_to_trajectory(plan, mechanism.joint_names,
+                                                     self._header())
+            response.poses = [pose_msg(mechanism, p) for p in plan.poses]
             response.min_singularity_margin = float(plan.validation.min_margin)
         response.success = True
         response.error_code = PlanPath.Response.ERROR_NONE
@@ -395,18 +413,19 @@ def _named(state):
     response = PlanPath.Response()
     if state is not None:
         response.roadmap_stamp = state.stamp
-        response.roadmap_rho1 = _rho1(state.planner)
+        roadmap = state.planner.roadmap
+        names = roadmap.mechanism.joint_names
+        response.roadmap_fixed_joints = [names[joint] for joint, _ in roadmap.grid.fixed]
+        response.roadmap_fixed_values = [float(value) for _, value in roadmap.grid.fixed]
     return response
 
 
-def _describe(grid):
-    rho1 = dict(grid.fixed).get(0)
-    return f"rho1 = {rho1:g}" if rho1 is not None else f"all legs free, {grid.size} cells"
-
-
-def _rho1(planner):
-    """The roadmap's fixed rho1 (joint 0 of the 3-RPR), NaN when it is free."""
-    return dict(planner.roadmap.grid.fixed).get(0, math.nan)
+def _describe(roadmap):
+    grid, names = roadmap.grid, roadmap.mechanism.joint_names
+    if not grid.fixed:
+        return f"the {roadmap.mechanism.kind}, every joint free, {grid.size} cells"
+    fixed = ", ".join(f"{names[joint]} = {value:g}" for joint, value in grid.fixed)
+    return f"the {roadmap.mechanism.kind}, {fixed}"
 
 
 def _error(response, code, message, feasibility=PlanPath.Response.FEASIBILITY_UNKNOWN):

@@ -1,11 +1,12 @@
 """What the suite's nodes share, as nav2's ``qos_profiles``: the QoS of each
-kind of topic, the joint names and the frame of the manipulator's base."""
+kind of topic, the 3-RPR's passive joint names and the frame of the
+mechanism's base."""
 
 from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy,
                        qos_profile_sensor_data)
 
-__all__ = ["LATCHED_QOS", "STATE_QOS", "SENSOR_QOS", "SERVICE_QOS", "JOINT_NAMES",
-           "PASSIVE_JOINT_NAMES", "BASE_FRAME"]
+__all__ = ["LATCHED_QOS", "STATE_QOS", "SENSOR_QOS", "SERVICE_QOS", "PASSIVE_JOINT_NAMES",
+           "BASE_FRAME"]
 
 # Maps and roadmaps, as nav2's map server: the latest one, to late joiners too
 # (subscribers use the same profile).
@@ -35,9 +36,8 @@ STATE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
 # Readers of those streams that would rather skip a sample than wait for its
 # resend (the recorder): best effort matches a reliable writer too.
 SENSOR_QOS = qos_profile_sensor_data
-# The 3-RPR's actuated legs, in the core's joint order.
-JOINT_NAMES = ["rho1", "rho2", "rho3"]
-# Its passive revolute joints at the base, the legs' directions.
+# The 3-RPR's passive revolute joints at the base, the legs' directions
+# (the actuated joints are the mechanism's joint_names).
 PASSIVE_JOINT_NAMES = ["theta1", "theta2", "theta3"]
 # The frame of the base points A1..A3 and of every pose.
 BASE_FRAME = "base"

@@ -7,47 +7,51 @@ late joiners get the latest):
   patches and continuation links;
 * ``roadmap`` (rpr3_gwr_msgs/WorkspaceRoadmap): patches and gates;
 * for RViz and Foxglove, on 2-D grids, in the frame ``joint_space``
-  (x = rho2, y = rho3): ``field_count_map`` and ``field_region_map``
-  (nav_msgs/OccupancyGrid, as maps) and ``roadmap_markers``
-  (visualization_msgs/MarkerArray: patch labels, gates).
+  (x, y = the two free joints, for the paper's slice rho2 and rho3):
+  ``field_count_map`` and ``field_region_map`` (nav_msgs/OccupancyGrid, as
+  maps) and ``roadmap_markers`` (visualization_msgs/MarkerArray: patch
+  labels, gates).
 
-Parameters: the geometry (``a1``, ``a2``, ``a3``, ``d1``, ``d3`` [length
-unit], ``beta`` [rad], read-only, :mod:`.geometry_parameters`) and the grid
-(``rho1``, ``rho2_range``, ``rho3_range``, ``step`` [length unit]), which
-may change at run time: a change is checked at once (at least two cells along
-each axis, at most the core's ``MAX_GRID_CELLS``, some cell with a
-direct-kinematic solution) and refused with a reason, else the roadmap is
-rebuilt and republished.  A
-rebuilt roadmap without a patch is not published: the parameters go back to
-the last published grid, whose roadmap stays latched.
+Parameters: the mechanism (``mechanism_file``, read-only,
+:mod:`.mechanism_parameters`; the paper's 3-RPR by default) and the slice,
+which may change at run time: the mechanism's first joint fixed at
+``fixed_value`` [joint unit], the others over the file's box, or over
+``ranges`` (``[min, max]`` of each free joint, in order) and ``step``
+[joint unit] when given.  A change is checked at once (at least two cells
+along each axis, at most the core's ``MAX_GRID_CELLS``, some cell with a
+direct-kinematic solution, values within the file's box) and refused with a
+reason, else the roadmap is rebuilt and republished.  A rebuilt roadmap
+without a patch is not published: the parameters go back to those of the
+published roadmap, which stays latched.
 
-``full`` (default false) builds the full 3-DOF roadmap instead, all three
-legs free on the core's adaptive grid (``FULL_BASE_GRID`` refined
-``FULL_REFINEMENT`` times; the slice parameters are then unused), through the
-core's roadmap cache (``$RPR3_GWR_CACHE``, else ``~/.cache/rpr3-gwr``): about
-25 s the first time, 2 to 3 s from the cache.  It is published on the same
-topics; the maps and markers, drawn for 2-D grids, are not.
+``full`` (default false) builds the full roadmap instead, every joint free,
+through the core's roadmap cache (``$RPR3_GWR_CACHE``, else
+``~/.cache/rpr3-gwr``): for the paper's 3-RPR the core's adaptive grid
+(``FULL_BASE_GRID`` refined ``FULL_REFINEMENT`` times; about 25 s the first
+time, 2 to 3 s from the cache), for another mechanism its file's whole box.
+It is published on the same topics; the maps and markers, drawn for 2-D
+grids, are not.
 """
 
 import time
 
-from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
+from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rpr3_gwr_core.exceptions import GWRError
+from rpr3_gwr_core.exceptions import GWRError, InvalidInputError
 from rpr3_gwr_core.io.cache import cached_roadmap
-from rpr3_gwr_core.paper import FULL_BASE_GRID, FULL_REFINEMENT, rho1_slice
-from rpr3_gwr_core.workspace import AdaptiveGrid, build_roadmap
-from rpr3_gwr_core.workspace.grid import check_roadmap_grid
+from rpr3_gwr_core.paper import FULL_BASE_GRID, FULL_REFINEMENT, PAPER_GEOMETRY
+from rpr3_gwr_core.workspace import build_roadmap
+from rpr3_gwr_core.workspace.grid import Axis, Grid, check_roadmap_grid
 from nav_msgs.msg import OccupancyGrid
 from rpr3_gwr_msgs.msg import NSolutionField, WorkspaceRoadmap
 from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
 
 from .conversions import roadmap_to_msgs
-from .geometry_parameters import declare_geometry
+from .mechanism_parameters import box_middle, declare_mechanism
 from .memory import release_free_memory, use_one_arena
 from .profiles import BASE_FRAME, LATCHED_QOS
 from .spin import run
@@ -55,13 +59,9 @@ from .visualization import field_maps, roadmap_markers
 
 __all__ = ["RoadmapBuilder", "main"]
 
-_GRID_PARAMETERS = ("rho1", "rho2_range", "rho3_range", "step", "full")
-
-
-def _length(description, low=0.0, high=1000.0):
-    return ParameterDescriptor(description=description,
-                               floating_point_range=[FloatingPointRange(from_value=low,
-                                                                        to_value=high)])
+_GRID_PARAMETERS = ("fixed_value", "ranges", "step", "full")
+# The paper's slice: rho1 = 17.
+_PAPER_RHO1 = 17.0
 
 
 class RoadmapBuilder(Node):
@@ -69,24 +69,36 @@ class RoadmapBuilder(Node):
 
     def __init__(self, **kwargs):
         super().__init__("roadmap_builder", **kwargs)
-        self.geometry = declare_geometry(self)
-        self.declare_parameter("rho1", 17.0, _length("Fixed first leg [length unit]",
-                                                     low=0.001))
-        self.declare_parameter("rho2_range", [0.0, 50.0], ParameterDescriptor(
-            description="Grid range of rho2, [min, max] [length unit]"))
-        self.declare_parameter("rho3_range", [0.0, 50.0], ParameterDescriptor(
-            description="Grid range of rho3, [min, max] [length unit]"))
-        self.declare_parameter("step", 0.125, _length("Grid step [length unit]", low=0.001,
-                                                      high=100.0))
+        self.described = declare_mechanism(self)
+        self.mechanism = self.described.mechanism
+        first = self.mechanism.joint_names[0]
+        self.declare_parameter(
+            "fixed_value", _PAPER_RHO1 if self.mechanism == PAPER_GEOMETRY
+            else box_middle(self.described.axes[0]),
+            ParameterDescriptor(description=f"Value at which the slice fixes the mechanism's "
+                                            f"first joint, {first}, within the file's box; by "
+                                            "default the paper's rho1 = 17 for the paper's "
+                                            "3-RPR, else the middle of the box (0 for a joint "
+                                            "that turns fully) [joint unit]"))
+        self.declare_parameter("ranges", None, ParameterDescriptor(
+            description="[min, max] of each free joint in order, within the file's box; "
+                        "empty for the box (a joint that turns fully: its whole turn) "
+                        "[joint unit]", dynamic_typing=True))
+        self.declare_parameter("step", 0.0, ParameterDescriptor(
+            description="Grid step of the free joints; 0 for the file's steps (with ranges, "
+                        "a periodic joint's too) [joint unit]"))
         self.declare_parameter("full", False, ParameterDescriptor(
-            description="Build the full 3-DOF roadmap (all legs free, adaptive grid, cached) "
-                        "instead of the slice at rho1"))
+            description="Build the full roadmap (every joint free, cached: the paper's 3-RPR "
+                        "on the core's adaptive grid, another mechanism on its file's box) "
+                        "instead of the slice"))
         self.field_pub = self.create_publisher(NSolutionField, "field", LATCHED_QOS)
         self.roadmap_pub = self.create_publisher(WorkspaceRoadmap, "roadmap", LATCHED_QOS)
         self.map_pubs = [self.create_publisher(OccupancyGrid, topic, LATCHED_QOS)
                          for topic in ("field_count_map", "field_region_map")]
         self.marker_pub = self.create_publisher(MarkerArray, "roadmap_markers", LATCHED_QOS)
         self.roadmap = None
+        # The grid parameters of the published roadmap.
+        self._published = None
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._parameters_set)
         # Builds run in a callback of their own, woken by the parameter
@@ -95,41 +107,63 @@ class RoadmapBuilder(Node):
             self._on_rebuild, callback_group=MutuallyExclusiveCallbackGroup())
         self._rebuild.trigger()
 
-    def _grid(self, overrides=None):
-        """The slice the parameters ask for, or None for the full roadmap."""
+    def _values(self, overrides=None):
         values = {name: self.get_parameter(name).value for name in _GRID_PARAMETERS}
+        values["ranges"] = list(values["ranges"] or [])
         values.update(overrides or {})
+        return values
+
+    def _grid(self, values):
+        """The grid and refinement the parameter values ask for (the full
+        roadmap's refinement is None on a mechanism file's box)."""
         if values["full"]:
-            return None
-        return rho1_slice(values["rho1"], tuple(values["rho2_range"]),
-                          tuple(values["rho3_range"]), values["step"])
+            if self.mechanism == PAPER_GEOMETRY:
+                return FULL_BASE_GRID, FULL_REFINEMENT
+            return self.described.grid(), None
+        first = self.mechanism.joint_names[0]
+        box = self.described.grid({first: values["fixed_value"]})
+        ranges, step = list(values["ranges"] or []), values["step"]
+        if not ranges and not step:
+            return box, None
+        if ranges and len(ranges) != 2 * len(box.axes):
+            raise InvalidInputError(f"ranges gives [min, max] of each of the "
+                                    f"{len(box.axes)} free joints, got {len(ranges)} values")
+        axes = []
+        for k, axis in enumerate(box.axes):
+            name = self.mechanism.joint_names[axis.joint]
+            if not ranges:
+                if axis.periodic:
+                    raise InvalidInputError(f"{name} turns fully, in the file's cells: give "
+                                            "ranges to sample part of its turn with a step")
+                low, high = axis.low, axis.high
+            else:
+                low, high = ranges[2 * k], ranges[2 * k + 1]
+                if not axis.periodic and not axis.low <= low <= high <= axis.high:
+                    raise InvalidInputError(f"{name} in [{low:g}, {high:g}] leaves its range "
+                                            f"[{axis.low:g}, {axis.high:g}]")
+            axes.append(Axis(axis.joint, low, high, step or axis.step))
+        return Grid(axes=tuple(axes), fixed=box.fixed), None
 
     def _check_parameters(self, parameters):
         overrides = {p.name: p.value for p in parameters if p.name in _GRID_PARAMETERS}
         if not overrides:
             return SetParametersResult(successful=True)
         try:
-            grid = self._grid(overrides)
-            if grid is None:
-                return SetParametersResult(successful=True)
+            grid, refinement = self._grid(self._values(overrides))
         except (GWRError, TypeError, ValueError) as exc:
             return SetParametersResult(successful=False, reason=f"invalid grid: {exc}")
+        if refinement is not None:
+            return SetParametersResult(successful=True)
         try:
-            check_roadmap_grid(self.geometry, grid)
+            check_roadmap_grid(self.mechanism, grid)
         except GWRError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
         return SetParametersResult(successful=True)
 
     def _parameters_set(self, parameters):
         if any(p.name in _GRID_PARAMETERS for p in parameters) and (
-                self.roadmap is None or self._grid() != self._published_request):
+                self.roadmap is None or self._values() != self._published):
             self._rebuild.trigger()
-
-    @property
-    def _published_request(self):
-        """What the published roadmap answers: its slice, or None if full."""
-        grid = self.roadmap.grid
-        return None if isinstance(grid, AdaptiveGrid) and grid.base == FULL_BASE_GRID else grid
 
     def _on_rebuild(self):
         self._build()
@@ -138,35 +172,42 @@ class RoadmapBuilder(Node):
         release_free_memory()
 
     def _build(self):
-        grid = self._grid()
-        if grid is None:
-            self.get_logger().info("building the full 3-DOF roadmap (all legs free) or "
-                                   "loading it from the cache")
+        values = self._values()
+        try:
+            grid, refinement = self._grid(values)
+        except GWRError as exc:  # given at start-up: refused, not checked
+            self.get_logger().error(f"invalid grid: {exc}")
+            self._keep_last_good()
+            return
+        names = self.mechanism.joint_names
+        if values["full"]:
+            self.get_logger().info(f"building the full roadmap of the {self.mechanism.kind} "
+                                   "(every joint free) or loading it from the cache")
         else:
-            n2, n3 = grid.shape
-            self.get_logger().info(f"building the roadmap: rho1 = {grid.fixed_value(0):g}, "
-                                   f"{n2} x {n3} cells")
+            fixed = ", ".join(f"{names[joint]} = {value:g}" for joint, value in grid.fixed)
+            self.get_logger().info(f"building the roadmap of the {self.mechanism.kind}: "
+                                   f"{fixed}, {' x '.join(map(str, grid.shape))} cells")
         start = time.perf_counter()
 
         def progress(stage, fraction):
             self.get_logger().info(f"  {fraction:4.0%} {stage}")
 
         try:
-            if grid is None:
-                roadmap, _ = cached_roadmap(self.geometry, FULL_BASE_GRID, progress=progress,
-                                            refinement=FULL_REFINEMENT)
+            if values["full"]:
+                roadmap, _ = cached_roadmap(self.mechanism, grid, progress=progress,
+                                            refinement=refinement)
             else:
-                roadmap = build_roadmap(self.geometry, grid, progress=progress)
+                roadmap = build_roadmap(self.mechanism, grid, progress=progress)
         except Exception as exc:  # a failed build must not take the builder down
             self.get_logger().error(f"building the roadmap failed: {exc!r}")
-            self._keep_last_good(grid)
+            self._keep_last_good()
             return
         seg = roadmap.segmentation
         if not seg.patches:
             self.get_logger().error("the roadmap has no patch")
-            self._keep_last_good(grid)
+            self._keep_last_good()
             return
-        self.roadmap = roadmap
+        self.roadmap, self._published = roadmap, values
         built = time.perf_counter()
         header = Header(stamp=self.get_clock().now().to_msg(), frame_id=BASE_FRAME)
         field_msg, roadmap_msg = roadmap_to_msgs(roadmap, header)
@@ -184,24 +225,15 @@ class RoadmapBuilder(Node):
             f"{len(seg.gates)} gates, built in {built - start:.2f} s, messages packed in "
             f"{packed - built:.2f} s, published in {sent - packed:.2f} s")
 
-    def _keep_last_good(self, grid):
+    def _keep_last_good(self):
         """Leave the published roadmap latched and the parameters naming its grid."""
         if self.roadmap is None:
             self.get_logger().error("no roadmap is published")
             return
-        good = self._published_request
         self.get_logger().error("the published roadmap stays; the grid parameters go back "
                                 "to its grid")
-        if good is None:
-            self.set_parameters_atomically([Parameter("full", value=True)])
-            return
-        rho2, rho3 = good.axes
-        self.set_parameters_atomically([
-            Parameter("full", value=False),
-            Parameter("rho1", value=good.fixed_value(0)),
-            Parameter("rho2_range", value=[rho2.low, rho2.high]),
-            Parameter("rho3_range", value=[rho3.low, rho3.high]),
-            Parameter("step", value=rho2.step)])
+        self.set_parameters_atomically([Parameter(name, value=value)
+                                        for name, value in self._published.items()])
 
 
 def main(args=None):

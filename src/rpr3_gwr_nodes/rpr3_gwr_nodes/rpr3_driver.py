@@ -1,16 +1,21 @@
-"""rpr3_driver: a simulated 3-RPR that replays leg trajectories.
+"""rpr3_driver: a simulated parallel mechanism that replays joint trajectories.
 
-Like the real mechanism, the platform follows the commanded legs by
-continuation of the constraint equations (it is never looked up in a table),
-so it stays in its assembly mode unless a singularity is crossed.
+The mechanism is its ``mechanism_file`` (:mod:`.mechanism_parameters`, the
+builder's; the paper's 3-RPR by default).  Like the real mechanism, the
+platform follows the commanded joints by continuation of the constraint
+equations (it is never looked up in a table), so it stays in its assembly
+mode unless a singularity is crossed.
 
 * ``joint_states`` (sensor_msgs/JointState, reliable as
   joint_state_broadcaster's, so that readers of any reliability get them,
-  ``rate`` Hz): the active legs rho1..rho3 (positions and velocities) and the
-  passive angles theta1..theta3;
+  ``rate`` Hz): the actuated joints by the mechanism's names (positions and
+  velocities; a joint that turns fully counts its turns, as a continuous
+  joint), then the passive joints the core gives (the 3-RPR's leg
+  directions theta1..theta3);
 * ``platform_pose`` (rpr3_gwr_msgs/PlatformPose, same rate and QoS);
 * ``mechanism_markers`` (visualization_msgs/MarkerArray, same rate, stamp
-  and QoS as the joint states, frame ``base``): base points, legs and
+  and QoS as the joint states, frame ``base``): base points, legs (with
+  the elbows or slider joints of the mechanisms that have them) and
   platform, coloured from green (margin ``warn_margin`` and above) to red
   (``abort_margin``);
 * ``/diagnostics`` (diagnostic_msgs/DiagnosticArray, same QoS, 1 Hz and at
@@ -23,19 +28,19 @@ so it stays in its assembly mode unless a singularity is crossed.
   joint_trajectory_controller does, a goal is validated when it arrives and
   rejected there, with the reason in the log: no points, wrong joint names,
   a point without one position per joint, velocities or accelerations
-  neither empty nor one per joint, efforts (the legs are position
-  controlled), legs not finite or outside ``leg_limits``, velocities or
-  accelerations not finite, time stamps not normalised (``nanosec`` of a
+  neither empty nor one per joint, efforts (the joints are position
+  controlled), joints not finite or outside their ranges in the mechanism
+  file (a joint that turns fully has none), velocities or accelerations
+  not finite, time stamps not normalised (``nanosec`` of a
   second or more), negative or not strictly increasing, a joint faster than
   ``max_velocity``, a first point farther than ``start_tolerance`` from the
-  current legs, or another goal executing.  Before each control step the
+  current joints (by whole turns for a joint that turns fully), or another
+  goal executing.  Before each control step the
   driver checks where the platform would go: if the margin would fall below
   ``abort_margin``, det(Jx) would change sign, or the platform could not
   follow, it aborts the goal, says why and with which margin, and holds still
-  at the last safe legs;
+  at the last safe joints;
 * ``reset`` (rpr3_gwr_msgs/ResetDriver): puts the platform at a configuration.
-
-The geometry parameters are the builder's (:mod:`.geometry_parameters`).
 """
 
 import math
@@ -49,17 +54,21 @@ from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rpr3_gwr_core.exceptions import GWRError, InvalidInputError
 from rpr3_gwr_core.mechanisms.continuation import CANNOT_FOLLOW, CROSSED, follow_path
+from rpr3_gwr_core.paper import PAPER_GEOMETRY
 from rpr3_gwr_core.planning import DEFAULT_MAX_STEP
+from rpr3_gwr_core.planning.locate import DEFAULT_MODE_TOL
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import PlatformPose
 from rpr3_gwr_msgs.srv import ResetDriver
 from sensor_msgs.msg import JointState
 from visualization_msgs.msg import MarkerArray
 
-from .conversions import duration_msg
-from .geometry_parameters import declare_geometry
-from .profiles import JOINT_NAMES, PASSIVE_JOINT_NAMES, STATE_QOS
+from .conversions import configuration_from_msg, duration_msg, pose_msg
+from .mechanism_parameters import box_middle, declare_mechanism
+from .profiles import PASSIVE_JOINT_NAMES, STATE_QOS
 from .spin import run
 from .visualization import mechanism_markers
 
@@ -67,6 +76,8 @@ __all__ = ["Rpr3Driver", "main"]
 
 _Result = ExecuteTrajectory.Result
 _Reset = ResetDriver.Response
+# The paper's first example, where the paper's 3-RPR starts.
+_PAPER_START = [17.0, 12.0, 18.0, math.radians(122.82)]
 
 
 def _seconds(duration):
@@ -74,15 +85,11 @@ def _seconds(duration):
 
 
 def _slope(times, positions, t):
-    """Velocity of the piecewise-linear leg path at time t [length unit/s]."""
+    """Velocity of the piecewise-linear joint path at time t [joint unit/s]."""
     if len(times) < 2 or t >= times[-1]:
-        return np.zeros(3)
+        return np.zeros(positions.shape[1])
     k = int(np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(times) - 2))
     return (positions[k + 1] - positions[k]) / (times[k + 1] - times[k])
-
-
-def _pose_msg(pose):
-    return PlatformPose(x=float(pose[0]), y=float(pose[1]), alpha=float(pose[2]))
 
 
 class _Refused(Exception):
@@ -111,25 +118,35 @@ class Rpr3Driver(Node):
                  "aborts, and diagnostics say ERROR", 1.0)
         positive("warn_margin", 0.02, "Normalised |det Jx| below which diagnostics say WARN", 1.0)
         positive("start_tolerance", 1e-3, "Largest distance of a trajectory's first point from "
-                 "the current legs [length unit]")
+                 "the current joints [joint unit]")
         positive("time_scale", 1.0, "Playback speed factor: 2 replays twice as fast", 1000.0)
         positive("max_velocity", 50.0, "Fastest joint speed a trajectory may ask for, as it is "
-                 "timed [length unit/s]")
-        self.declare_parameter("leg_limits", [0.0, 50.0], ParameterDescriptor(
-            description="Shortest and longest leg [length unit]", read_only=True))
-        self.declare_parameter("initial_configuration", [17.0, 12.0, 18.0, math.radians(122.82)],
-                               ParameterDescriptor(
-                                   description="Initial (rho1, rho2, rho3 [length unit], "
-                                               "alpha [rad])", read_only=True))
-        self.geometry = declare_geometry(self)
-        self.leg_limits = tuple(float(v) for v in self.get_parameter("leg_limits").value)
+                 "timed [joint unit/s]")
+        described = declare_mechanism(self)
+        self.mechanism = described.mechanism
+        names = self.mechanism.joint_names
+        # Joint ranges are the file's box; a joint that turns fully has none.
+        self.limits = [None if a.periodic else (a.low, a.high) for a in described.axes]
+        self._periodic = np.array([a.periodic for a in described.axes])
+        self.declare_parameter(
+            "initial_configuration",
+            _PAPER_START if self.mechanism == PAPER_GEOMETRY else Parameter.Type.DOUBLE_ARRAY,
+            ParameterDescriptor(
+                description=f"Initial joints ({', '.join(names)}) then mode coordinate "
+                            f"{self.mechanism.pose_names[self.mechanism.mode_coordinate]} "
+                            "[joint unit, mode unit]; by default the paper's first example "
+                            "for the paper's 3-RPR, else the middle of the box in its assembly "
+                            "mode of largest margin", read_only=True))
         self._lock = threading.Lock()
         self._active = False  # a goal is accepted or executing (under _lock)
         self._holding = ""  # why the driver holds after an abort, "" when it does not
         self._stopping = threading.Event()
+        # Not given for a mechanism other than the paper's: unset.
+        initial = self.get_parameter_or("initial_configuration",
+                                        Parameter("initial_configuration")).value
         self.rho, self.pose, self.margin = self._assembly(
-            self.get_parameter("initial_configuration").value)
-        self.velocity = np.zeros(3)
+            self._box_middle(described.axes) if initial is None else initial)
+        self.velocity = np.zeros(len(names))
         self.joint_pub = self.create_publisher(JointState, "joint_states", STATE_QOS)
         self.pose_pub = self.create_publisher(PlatformPose, "platform_pose", STATE_QOS)
         self.marker_pub = self.create_publisher(MarkerArray, "mechanism_markers", STATE_QOS)
@@ -146,38 +163,64 @@ class Rpr3Driver(Node):
 
     # --- state -------------------------------------------------------------------------------
 
+    def _solutions(self, joints):
+        """The direct-kinematic solutions of joints, shape (count, pose_size)."""
+        count, poses = self.mechanism.solve(np.asarray(joints, dtype=float)[None])
+        return poses[0, :count[0]]
+
+    def _box_middle(self, axes):
+        """The middle of the box in its assembly mode of largest margin."""
+        joints = [box_middle(a) for a in axes]
+        poses = self._solutions(joints)
+        if not len(poses):
+            raise InvalidInputError(f"the middle of the box, {joints}, has no direct-kinematic "
+                                    "solution: give initial_configuration")
+        margins = np.abs(self.mechanism.margin(poses, np.array(joints)))
+        return [*joints, float(poses[int(np.argmax(margins)), self.mechanism.mode_coordinate])]
+
     def _assembly(self, configuration):
-        """Legs, pose and margin of the assembly mode nearest alpha in
-        ``(rho1, rho2, rho3, alpha)``.
+        """Joints, pose and margin of the assembly mode nearest the mode
+        coordinate in ``(*joints, mode)``.
 
         Raises
         ------
         _Refused
             With the reset's error code when the configuration is not valid.
         """
+        mechanism = self.mechanism
         values = tuple(float(v) for v in configuration)
-        if len(values) != 4 or not all(math.isfinite(v) for v in values) or min(values[:3]) < 0:
-            raise _Refused(_Reset.ERROR_INVALID_INPUT, "a configuration is (rho1, rho2, rho3, "
-                           f"alpha), finite, with non-negative legs: got {values}")
-        low, high = self.leg_limits
-        if not all(low <= v <= high for v in values[:3]):
-            raise _Refused(_Reset.ERROR_OUT_OF_RANGE,
-                           f"legs {values[:3]} outside the leg limits [{low:g}, {high:g}]")
-        rho, alpha = np.array(values[:3]), values[3]
-        poses = self.geometry.direct_kinematics(rho)
+        if len(values) != mechanism.n_joints + 1 or not all(math.isfinite(v) for v in values):
+            raise _Refused(_Reset.ERROR_INVALID_INPUT, f"a configuration is "
+                           f"{(*mechanism.joint_names, 'mode')}, finite: got {values}")
+        joints, mode = np.array(values[:-1]), values[-1]
+        try:
+            mechanism.check_joints(joints)
+        except InvalidInputError as exc:
+            raise _Refused(_Reset.ERROR_INVALID_INPUT, str(exc)) from None
+        except GWRError as exc:  # the five-bar's coinciding elbows: a singularity
+            raise _Refused(_Reset.ERROR_SINGULAR, str(exc)) from None
+        for name, value, limit in zip(mechanism.joint_names, joints, self.limits):
+            if limit is not None and not limit[0] <= value <= limit[1]:
+                raise _Refused(_Reset.ERROR_OUT_OF_RANGE, f"{name} = {value:g} outside its "
+                               f"range [{limit[0]:g}, {limit[1]:g}]")
+        poses = self._solutions(joints)
         if len(poses) == 0:
-            raise _Refused(_Reset.ERROR_NO_SOLUTION, f"no real solution at rho = {values[:3]}")
-        off = np.abs(np.remainder(poses[:, 2] - alpha + np.pi, 2 * np.pi) - np.pi)
-        k = int(np.argmin(off))
-        if off[k] > math.radians(1.0):
+            raise _Refused(_Reset.ERROR_NO_SOLUTION, f"no real solution at {values[:-1]}")
+        k = mechanism.mode_coordinate
+        off = poses[:, k] - mode
+        if mechanism.angular[k]:
+            off = np.remainder(off + np.pi, 2 * np.pi) - np.pi
+        off = np.abs(off)
+        nearest = int(np.argmin(off))
+        if off[nearest] > DEFAULT_MODE_TOL:
             raise _Refused(_Reset.ERROR_NO_ASSEMBLY_MODE,
-                           f"no assembly mode within 1 deg of alpha = "
-                           f"{math.degrees(math.remainder(alpha, 2 * math.pi)):.2f} deg")
-        margin = float(self.geometry.margin(poses[k]))
+                           f"no assembly mode within {DEFAULT_MODE_TOL:.4g} of "
+                           f"{mechanism.pose_names[k]} = {mode:g}")
+        margin = float(mechanism.margin(poses[nearest], joints))
         if abs(margin) < self.get_parameter("abort_margin").value:
             raise _Refused(_Reset.ERROR_SINGULAR, f"configuration is singular (margin "
                            f"{abs(margin):.2e})")
-        return rho, poses[k], margin
+        return joints, poses[nearest], margin
 
     def state(self):
         """``(rho, pose, margin)`` under the lock."""
@@ -190,14 +233,20 @@ class Rpr3Driver(Node):
             margin = self.margin
         msg = JointState()
         msg.header.stamp = self.get_clock().now().to_msg()
-        msg.name = JOINT_NAMES + PASSIVE_JOINT_NAMES
-        msg.position = [float(v) for v in rho] + [
-            float(v) for v in self.geometry.passive_angles(pose)]
-        msg.velocity = [float(v) for v in velocity] + [math.nan] * 3
+        names = list(self.mechanism.joint_names)
+        position = [float(v) for v in rho]
+        speed = [float(v) for v in velocity]
+        # Of the passive joints, the core gives the 3-RPR's leg directions.
+        passive = getattr(self.mechanism, "passive_angles", None)
+        if passive is not None:
+            names += PASSIVE_JOINT_NAMES
+            position += [float(v) for v in passive(pose)]
+            speed += [math.nan] * len(PASSIVE_JOINT_NAMES)
+        msg.name, msg.position, msg.velocity = names, position, speed
         self.joint_pub.publish(msg)
-        self.pose_pub.publish(_pose_msg(pose))
+        self.pose_pub.publish(pose_msg(self.mechanism, pose))
         self.marker_pub.publish(mechanism_markers(
-            self.geometry, pose, margin, self.get_parameter("warn_margin").value,
+            self.mechanism, pose, rho, margin, self.get_parameter("warn_margin").value,
             self.get_parameter("abort_margin").value, msg.header.stamp))
 
     def diagnostic_status(self):
@@ -211,11 +260,13 @@ class Rpr3Driver(Node):
             level, message = DiagnosticStatus.WARN, "near a parallel singularity"
         else:
             level, message = DiagnosticStatus.OK, "regular"
+        mode = self.mechanism.mode_coordinate
         return DiagnosticStatus(
-            name="rpr3_driver: singularity", hardware_id="rpr3_sim", level=level, message=message,
+            name="rpr3_driver: singularity", hardware_id=f"{self.mechanism.kind}_sim",
+            level=level, message=message,
             values=[KeyValue(key="singularity_margin", value=f"{size:.6f}"),
                     KeyValue(key="aspect", value=str(int(np.sign(margin)))),
-                    KeyValue(key="alpha", value=f"{pose[2]:.6f}")])
+                    KeyValue(key=self.mechanism.pose_names[mode], value=f"{pose[mode]:.6f}")])
 
     def _publish_diagnostics(self):
         array = DiagnosticArray(status=[self.diagnostic_status()])
@@ -226,13 +277,16 @@ class Rpr3Driver(Node):
 
     def _on_reset(self, request, response):
         try:
-            c = request.configuration
-            rho, pose, margin = self._assembly((c.rho1, c.rho2, c.rho3, c.alpha))
+            try:
+                configuration = configuration_from_msg(self.mechanism, request.configuration)
+            except InvalidInputError as exc:
+                raise _Refused(_Reset.ERROR_INVALID_INPUT, str(exc)) from None
+            rho, pose, margin = self._assembly(configuration)
             with self._lock:
                 if self._active:
                     raise _Refused(_Reset.ERROR_BUSY, "a trajectory is executing")
                 self.rho, self.pose, self.margin = rho, pose, margin
-                self.velocity = np.zeros(3)
+                self.velocity = np.zeros(len(rho))
                 self._holding = ""
         except _Refused as exc:
             response.error_code, response.error_msg = exc.code, str(exc)
@@ -244,7 +298,7 @@ class Rpr3Driver(Node):
             return response
         response.success = True
         response.error_code = _Reset.ERROR_NONE
-        response.pose = _pose_msg(pose)
+        response.pose = pose_msg(self.mechanism, pose)
         return response
 
     # --- trajectories ------------------------------------------------------------------------
@@ -268,12 +322,13 @@ class Rpr3Driver(Node):
 
     def _problem(self, trajectory):
         """Why a trajectory cannot be executed from here, or None."""
-        if list(trajectory.joint_names) != JOINT_NAMES:
-            return f"joint names must be {JOINT_NAMES}, got {list(trajectory.joint_names)}"
+        names = list(self.mechanism.joint_names)
+        if list(trajectory.joint_names) != names:
+            return f"joint names must be {names}, got {list(trajectory.joint_names)}"
         points = trajectory.points
         if not points:
             return "the trajectory has no points"
-        joints = len(JOINT_NAMES)
+        joints = len(names)
         if any(len(p.positions) != joints for p in points):
             return f"every point needs {joints} positions"
         for field in ("velocities", "accelerations"):
@@ -283,13 +338,14 @@ class Rpr3Driver(Node):
             if not all(math.isfinite(v) for p in points for v in getattr(p, field)):
                 return f"{field} must be finite"
         if any(len(p.effort) for p in points):
-            return "the legs are position controlled: effort must be empty"
+            return "the joints are position controlled: effort must be empty"
         positions = np.array([list(p.positions) for p in points])
         if not np.all(np.isfinite(positions)):
             return "positions must be finite"
-        low, high = self.leg_limits
-        if np.any(positions < low) or np.any(positions > high):
-            return f"legs must lie within the leg limits [{low:g}, {high:g}]"
+        for k, (name, limit) in enumerate(zip(names, self.limits)):
+            if limit is not None and (np.any(positions[:, k] < limit[0])
+                                      or np.any(positions[:, k] > limit[1])):
+                return f"{name} must lie within its range [{limit[0]:g}, {limit[1]:g}]"
         # A nanosec field of a second or more would shift the stamp past
         # the checks below (sec -1 and nanosec 2e9 read as +1 s).
         if any(p.time_from_start.nanosec >= 10**9 for p in points):
@@ -303,15 +359,21 @@ class Rpr3Driver(Node):
             speed = np.max(np.abs(np.diff(positions, axis=0)) / np.diff(times)[:, None])
             limit = self.get_parameter("max_velocity").value
             if speed > limit:
-                return f"a joint would move at {speed:.3g} length unit/s, above max_velocity " \
+                return f"a joint would move at {speed:.3g} joint unit/s, above max_velocity " \
                        f"{limit:g}"
         return self._start_gap(positions[0])
 
+    def _turns(self, first):
+        """Whole turns that bring the trajectory's ``first`` point nearest the
+        current joints (0 for a joint that does not turn fully)."""
+        rho, _, _ = self.state()
+        return np.where(self._periodic, 2 * np.pi * np.round((rho - first) / (2 * np.pi)), 0.0)
+
     def _start_gap(self, first):
         rho, _, _ = self.state()
-        gap = float(np.max(np.abs(first - rho)))
+        gap = float(np.max(np.abs(first + self._turns(first) - rho)))
         if gap > self.get_parameter("start_tolerance").value:
-            return f"the trajectory starts {gap:.4g} away from the current legs {rho.tolist()}"
+            return f"the trajectory starts {gap:.4g} away from the current joints {rho.tolist()}"
         return None
 
     def _execute(self, goal_handle):
@@ -324,12 +386,15 @@ class Rpr3Driver(Node):
                                f"internal error: {exc!r}", None)
         finally:
             with self._lock:
-                self.velocity = np.zeros(3)
+                self.velocity = np.zeros(self.mechanism.n_joints)
                 self._active = False
 
     def _run(self, goal_handle, result):
         trajectory = goal_handle.request.trajectory
         positions = np.array([list(p.positions) for p in trajectory.points])
+        # Counted from the current turn of the joints that turn fully, as the
+        # plan's path is continuous.
+        positions += self._turns(positions[0])
         times = np.array([_seconds(p.time_from_start) for p in trajectory.points])
         # A reset may have moved the platform since the goal was accepted.
         moved = self._start_gap(positions[0])
@@ -354,7 +419,8 @@ class Rpr3Driver(Node):
                                    "the driver is shutting down", smallest)
             previous = elapsed
             elapsed = min((time.monotonic() - begin) * scale, times[-1])
-            target = np.array([np.interp(elapsed, times, positions[:, j]) for j in range(3)])
+            target = np.array([np.interp(elapsed, times, positions[:, j])
+                               for j in range(positions.shape[1])])
             # A late control step must still pass through the waypoints in
             # between: the path, not a chord, is what was validated.
             between = (times > previous) & (times < elapsed)
@@ -364,9 +430,9 @@ class Rpr3Driver(Node):
             at = f"at t = {elapsed:.3f} s"
             if followed is None:
                 return self._abort(goal_handle, result, _Result.SINGULARITY_ABORT,
-                                   f"the platform cannot follow the legs {at}: a singularity "
+                                   f"the platform cannot follow the joints {at}: a singularity "
                                    f"(margin {smallest:.2e} before it)", smallest)
-            (x, y, alpha), margin, extreme = followed
+            new_pose, margin, extreme = followed
             if math.copysign(1.0, extreme) != sign:
                 return self._abort(goal_handle, result, _Result.ASSEMBLY_MODE_LEFT,
                                    f"det(Jx) would change sign {at} (margin {extreme:+.2e}): "
@@ -377,14 +443,13 @@ class Rpr3Driver(Node):
                                    f"< abort_margin {abort_margin:g} {at}",
                                    min(smallest, abs(extreme)))
             smallest = min(smallest, abs(extreme))
-            new_pose = np.array([x, y, math.atan2(math.sin(alpha), math.cos(alpha))])
             with self._lock:
                 self.velocity = _slope(times, positions, elapsed)
                 self.rho, self.pose, self.margin = target, new_pose, margin
             feedback.progress = float(elapsed / times[-1]) if times[-1] > 0 else 1.0
             feedback.singularity_margin = abs(margin)
             feedback.time_from_start = duration_msg(elapsed)
-            feedback.pose = _pose_msg(new_pose)
+            feedback.pose = pose_msg(self.mechanism, new_pose)
             goal_handle.publish_feedback(feedback)
             if elapsed >= times[-1]:
                 break
@@ -396,22 +461,23 @@ class Rpr3Driver(Node):
         return self._finish(result, smallest)
 
     def _follow(self, pose, rho, points, abort_margin):
-        """Follow the legs from ``rho`` through ``points`` as the validator
+        """Follow the joints from ``rho`` through ``points`` as the validator
         does (:func:`~rpr3_gwr_core.mechanisms.continuation.follow_path`, the
         same step control, stopping below ``abort_margin``); ``(pose, margin,
         extreme)`` with the most critical margin of the whole way (of the
         other sign if det(Jx) changed sign), or None when the platform cannot
         follow."""
         followed = np.array(pose, dtype=float)
-        start = float(self.geometry.margin(followed))
+        start = float(self.mechanism.margin(followed, rho))
         status, _, _, smallest = follow_path(
-            self.geometry, np.array([rho, *points], dtype=float), followed, abort_margin,
+            self.mechanism, np.array([rho, *points], dtype=float), followed, abort_margin,
             DEFAULT_MAX_STEP)
         if status == CANNOT_FOLLOW:
             return None
         extreme = math.copysign(smallest, start) if status != CROSSED \
             else -math.copysign(abort_margin, start)
-        return tuple(followed), float(self.geometry.margin(followed)), extreme
+        return (np.array(self.mechanism.wrap_scalar(followed)),
+                float(self.mechanism.margin(followed, points[-1])), extreme)
 
     def _abort(self, goal_handle, result, code, reason, smallest):
         self.get_logger().warning(f"aborting the trajectory and holding still: {reason}")
@@ -425,7 +491,7 @@ class Rpr3Driver(Node):
 
     def _finish(self, result, smallest):
         _, pose, margin = self.state()
-        result.final_pose = _pose_msg(pose)
+        result.final_pose = pose_msg(self.mechanism, pose)
         result.min_singularity_margin = float(abs(margin) if smallest is None else smallest)
         return result
 

@@ -2,10 +2,11 @@
 field, the roadmap and planned paths.
 
 Two frames: ``base`` (:data:`~.profiles.BASE_FRAME`), the plane of the
-manipulator, where the mechanism and the platform's path are drawn; and
-``joint_space`` (:data:`JOINT_SPACE_FRAME`), the grid's plane (x = rho2,
-y = rho3, in length units) of a 2-D roadmap, where the field maps, the
-roadmap and the joint path are drawn over one another.
+mechanism, where it and the platform's path are drawn; and ``joint_space``
+(:data:`JOINT_SPACE_FRAME`), the grid's plane (x, y = its two free joints,
+for the paper's slice rho2 and rho3, in joint units) of a 2-D roadmap,
+where the field maps, the roadmap and the joint path are drawn over one
+another.
 """
 
 import numpy as np
@@ -13,11 +14,12 @@ from geometry_msgs.msg import Point, Pose
 from nav_msgs.msg import MapMetaData, OccupancyGrid
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
+from rpr3_gwr_core.mechanisms import FiveBar
 
 from .profiles import BASE_FRAME
 
-__all__ = ["JOINT_SPACE_FRAME", "mechanism_markers", "field_maps", "roadmap_markers",
-           "path_markers", "margin_color"]
+__all__ = ["JOINT_SPACE_FRAME", "mechanism_points", "mechanism_markers", "field_maps",
+           "roadmap_markers", "path_markers", "margin_color"]
 
 JOINT_SPACE_FRAME = "joint_space"
 _BLUE = ColorRGBA(r=0.2, g=0.4, b=0.9, a=1.0)
@@ -43,15 +45,61 @@ def _marker(stamp, frame, namespace, kind, scale, color, identity=0):
     return marker
 
 
-def mechanism_markers(geometry, pose, margin, warn, abort, stamp):
-    """The 3-RPR at a pose in ``base``: base points, legs and platform, the
-    legs and platform coloured by the margin (:func:`margin_color`).
+def mechanism_points(mechanism, pose, joints):
+    """What :func:`mechanism_markers` draws of a mechanism at a pose and its
+    joints, in ``base`` [length unit].
+
+    The core places the 3-RPR's platform points (from the legs and their
+    directions), the moving base points of the 3-RRR and 3-PRR (elbows,
+    slider joints: ``base_points``) and, through the 3-RPR of the same
+    platform (``platform``), their platform points; the five-bar's elbows
+    follow its module's convention ``C_i = A_i + l1 (cos th_i, sin th_i)``,
+    which the core computes only inside its kernels.
+
+    Returns
+    -------
+    base : ndarray, shape (k, 2)
+        The fixed base joints.
+    legs : ndarray, shape (k, m, 2)
+        Each leg as a polyline from its base joint to the platform (through
+        its elbow or slider joint when it has one).
+    platform : ndarray, shape (p, 2)
+        The platform's corners (the five-bar's end effector alone).
+    """
+    joints = np.asarray(joints, dtype=float)
+    pose = np.asarray(pose, dtype=float)
+    if isinstance(mechanism, FiveBar):
+        base = np.array([[0.0, 0.0], [mechanism.d, 0.0]])
+        elbows = base + mechanism.l1 * np.stack([np.cos(joints), np.sin(joints)], axis=-1)
+        tip = np.broadcast_to(pose[:2], (2, 2))
+        return base, np.stack([base, elbows, tip], axis=1), pose[None, :2]
+    platform = getattr(mechanism, "platform", mechanism)
+    base = platform.base
+    # B_i from the legs' lengths and directions (for the 3-RPR the joints the
+    # driver reports).
+    theta = platform.passive_angles(pose)
+    corners = base + platform.inverse(pose)[:, None] * np.stack(
+        [np.cos(theta), np.sin(theta)], axis=-1)
+    if platform is mechanism:
+        return base, np.stack([base, corners], axis=1), corners
+    moving = mechanism.base_points(joints)
+    return base, np.stack([base, moving, corners], axis=1), corners
+
+
+def mechanism_markers(mechanism, pose, joints, margin, warn, abort, stamp):
+    """A mechanism at a pose in ``base``: base joints, legs and platform
+    (:func:`mechanism_points`), the legs and platform coloured by the margin
+    (:func:`margin_color`).
 
     Parameters
     ----------
-    geometry : rpr3_gwr_core.mechanisms.ThreeRPR
-    pose : array_like, shape (3,)
-        ``(x, y, alpha)`` [length unit, length unit, rad].
+    mechanism : rpr3_gwr_core.mechanisms.Mechanism
+        The 3-RPR, 3-RRR, 3-PRR or five-bar.
+    pose : array_like, shape (pose_size,)
+        The platform's pose (the 3-RPR: ``(x, y, alpha)`` [length unit,
+        length unit, rad]).
+    joints : array_like, shape (n_joints,)
+        The joints it solves.
     margin : float
         Its signed normalised det(Jx).
     warn, abort : float
@@ -61,22 +109,32 @@ def mechanism_markers(geometry, pose, margin, warn, abort, stamp):
     Returns
     -------
     visualization_msgs.msg.MarkerArray
-        Namespaces ``base`` (a sphere list of A1..A3), ``legs`` (a line list
-        A_i B_i) and ``platform`` (a closed line strip B1 B2 B3).
+        Namespaces ``base`` (a sphere list of the base joints), ``legs`` (a
+        line list of each leg's segments: A_i B_i for the 3-RPR, A_i C_i and
+        C_i B_i through the elbows or slider joints C_i) and ``platform`` (a
+        closed line strip B1 B2 B3; the five-bar's end effector as a sphere
+        list).
     """
-    # B_i from the legs' lengths and directions, the joints the driver reports.
-    base = geometry.base
-    theta = geometry.passive_angles(pose)
-    joints = base + geometry.inverse(pose)[:, None] * np.stack(
-        [np.cos(theta), np.sin(theta)], axis=-1)
+    base, legs, corners = mechanism_points(mechanism, pose, joints)
     color = margin_color(margin, warn, abort)
-    bases = _marker(stamp, BASE_FRAME, "base", Marker.SPHERE_LIST, 0.8, _GREY)
+    bases = _marker(stamp, BASE_FRAME, "base", Marker.SPHERE_LIST, 0.05 * _size(base), _GREY)
     bases.points = _points(base)
-    lines = _marker(stamp, BASE_FRAME, "legs", Marker.LINE_LIST, 0.25, color)
-    lines.points = _points(np.stack([base, joints], axis=1).reshape(-1, 2))
-    platform = _marker(stamp, BASE_FRAME, "platform", Marker.LINE_STRIP, 0.35, color)
-    platform.points = _points(np.vstack([joints, joints[:1]]))
+    lines = _marker(stamp, BASE_FRAME, "legs", Marker.LINE_LIST, 0.016 * _size(base), color)
+    lines.points = _points(np.stack([legs[:, :-1], legs[:, 1:]], axis=2).reshape(-1, 2))
+    if len(corners) > 1:
+        platform = _marker(stamp, BASE_FRAME, "platform", Marker.LINE_STRIP,
+                           0.022 * _size(base), color)
+        platform.points = _points(np.vstack([corners, corners[:1]]))
+    else:
+        platform = _marker(stamp, BASE_FRAME, "platform", Marker.SPHERE_LIST,
+                           0.05 * _size(base), color)
+        platform.points = _points(corners)
     return MarkerArray(markers=[bases, lines, platform])
+
+
+def _size(base):
+    """Marker sizes scale with the base (the paper's 3-RPR: 15.91 length units)."""
+    return max(float(np.ptp(base, axis=0).max()), 1e-9)
 
 
 def _plane_axes(roadmap):

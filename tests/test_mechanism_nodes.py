@@ -1,0 +1,234 @@
+"""The nodes on mechanisms other than the paper's 3-RPR, each given by its
+mechanism file: the builder builds the 3-RRR's slice th1 = 0, the planner
+plans its non-singular assembly-mode change (checked by a continuation of
+the test's own) and the driver executes it; on the five-bar the planner
+refuses an assembly-mode change as FEASIBILITY_OTHER_ASPECT.  Real rclpy and
+Fast DDS, the nodes in this process, spun by one executor thread."""
+
+import math
+import pathlib
+import threading
+import time
+
+import numpy as np
+import pytest
+import yaml
+from rclpy.action import ActionClient
+from rclpy.executors import MultiThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rpr3_gwr_msgs.action import ExecuteTrajectory
+from rpr3_gwr_msgs.msg import Configuration
+from rpr3_gwr_msgs.srv import PlanPath, ResetDriver
+from rpr3_gwr_nodes.planner import PlannerNode
+from rpr3_gwr_nodes.profiles import SENSOR_QOS
+from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
+from rpr3_gwr_nodes.rpr3_driver import Rpr3Driver
+from sensor_msgs.msg import JointState
+from visualization_msgs.msg import MarkerArray
+
+from moving_base_reference import MovingBaseReference, wrap
+
+CONFIG = pathlib.Path(__file__).resolve().parents[1] / "config"
+THREE_RRR, FIVE_BAR = CONFIG / "three_rrr.yaml", CONFIG / "five_bar.yaml"
+TIMEOUT = 60.0
+# Two assembly modes of the same joints, one aspect, joined through the
+# slice's two-solution region.
+TH = (0.0, 1.2043, 2.2515)
+MODE_A, MODE_B = 0.6526, 2.1165
+TH_NAMES = ["th1", "th2", "th3"]
+# Both assembly modes of the five-bar's th = (3.1, 2.5), by the circle
+# intersection (their y is the mode coordinate): opposite aspects.
+FIVE_BAR_TH, PLUS_Y, MINUS_Y = (3.1, 2.5), 0.11622901, -0.05862426
+
+# The 3-RRR written again from its file, not from the package: elbows
+# C_i = A_i + l1 (cos th_i, sin th_i), distal links l2.
+_RRR = yaml.safe_load(THREE_RRR.read_text())["mechanism"]
+_A = np.array([_RRR["a1"], _RRR["a2"], _RRR["a3"]], dtype=float)
+
+
+def _elbows(th):
+    th = np.asarray(th, dtype=float)
+    return _A + _RRR["l1"] * np.stack([np.cos(th), np.sin(th)], -1)
+
+
+# The torus direct kinematics is not used here: no closed form is needed.
+REFERENCE = MovingBaseReference(_elbows, None, _RRR["l2"], _RRR["d1"], _RRR["d3"],
+                                _RRR["beta"], angular=True)
+
+
+def _densified(joints, largest):
+    """The joint path with points inserted so that no joint changes more than
+    ``largest`` between two, and the indices of the original points."""
+    dense, waypoints = [joints[0]], [0]
+    for a, b in zip(joints[:-1], joints[1:]):
+        pieces = max(1, math.ceil(np.max(np.abs(b - a)) / largest))
+        dense += [a + (b - a) * k / pieces for k in range(1, pieces + 1)]
+        waypoints.append(len(dense) - 1)
+    return np.array(dense), waypoints
+
+
+def _wait(future, timeout=TIMEOUT):
+    done = threading.Event()
+    future.add_done_callback(lambda _: done.set())
+    assert done.wait(timeout), f"no answer within {timeout} s"
+    return future.result()
+
+
+class Suite:
+    """Builder, planner and (optionally) driver on one mechanism file, in a
+    namespace of their own, and a client."""
+
+    def __init__(self, context, path, namespace, builder_parameters=(), driver=False):
+        mechanism = [Parameter("mechanism_file", value=str(path))]
+        self.builder = RoadmapBuilder(context=context, namespace=namespace,
+                                      parameter_overrides=mechanism + list(builder_parameters))
+        self.planner = PlannerNode(context=context, namespace=namespace, parameter_overrides=[
+            *mechanism, Parameter("plan_workers", value=0)])
+        self.nodes = [self.builder, self.planner]
+        if driver:
+            self.driver = Rpr3Driver(context=context, namespace=namespace, parameter_overrides=[
+                *mechanism, Parameter("time_scale", value=50.0)])
+            self.nodes.append(self.driver)
+        self.client = Node("mechanism_test_client", context=context, namespace=namespace)
+        self.nodes.append(self.client)
+        self.plan_client = self.client.create_client(PlanPath, "plan_path")
+        self.reset_client = self.client.create_client(ResetDriver, "reset")
+        self.action_client = ActionClient(self.client, ExecuteTrajectory, "execute_trajectory")
+        self.joint_states, self.markers = [], []
+        self.client.create_subscription(JointState, "joint_states", self.joint_states.append,
+                                        SENSOR_QOS)
+        self.client.create_subscription(MarkerArray, "mechanism_markers", self.markers.append,
+                                        SENSOR_QOS)
+        self.executor = MultiThreadedExecutor(num_threads=4, context=context)
+        for node in self.nodes:
+            self.executor.add_node(node)
+        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
+        self.thread.start()
+        assert self.planner.ready.wait(TIMEOUT), "the planner got no roadmap"
+        assert self.plan_client.wait_for_service(timeout_sec=TIMEOUT)
+
+    def plan(self, start, goal, **options):
+        return _wait(self.plan_client.call_async(PlanPath.Request(start=start, goal=goal,
+                                                                  **options)))
+
+    def close(self):
+        self.executor.shutdown(timeout_sec=10.0)
+        self.thread.join(timeout=10.0)
+        for node in reversed(self.nodes):
+            node.destroy_node()
+
+
+@pytest.fixture
+def three_rrr(ros_context):
+    suite = Suite(ros_context, THREE_RRR, "three_rrr", driver=True)
+    try:
+        yield suite
+    finally:
+        suite.close()
+
+
+def _rrr(mode):
+    return Configuration(joint_names=TH_NAMES, positions=list(TH), mode=mode)
+
+
+def test_the_three_rrr_changes_assembly_mode_through_the_nodes(three_rrr):
+    roadmap = three_rrr.builder.roadmap
+    assert roadmap.mechanism.kind == "3-RRR" and roadmap.grid.fixed == ((0, 0.0),)
+    response = three_rrr.plan(_rrr(MODE_A), _rrr(MODE_B), smooth=True, max_velocity=1.0,
+                              max_acceleration=2.0)
+    assert response.success, response.error_msg
+    assert response.feasibility == PlanPath.Response.FEASIBILITY_CONNECTED
+    assert list(response.roadmap_fixed_joints) == ["th1"]
+    assert list(response.roadmap_fixed_values) == [0.0]
+    trajectory = response.trajectory
+    assert list(trajectory.joint_names) == TH_NAMES
+    assert all(list(p.names) == ["x", "y", "alpha"] for p in response.poses)
+    joints = np.array([p.positions for p in trajectory.points])
+    poses = np.array([p.values for p in response.poses])
+    np.testing.assert_allclose(joints[0], TH, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(wrap(joints[-1] - TH), 0.0, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(joints[:, 0], 0.0, rtol=0, atol=1e-12)  # the slice's th1
+    # The endpoints are the two assembly modes asked for, of one aspect.
+    assert abs(wrap(poses[0, 2] - MODE_A)) < 1e-3 and abs(wrap(poses[-1, 2] - MODE_B)) < 1e-3
+    start_residual = REFERENCE.residual(poses[0], joints[0])
+    assert np.max(np.abs(start_residual)) < 1e-8 * REFERENCE.scale**2
+    sign = np.sign(REFERENCE.margin(poses[0], joints[0]))
+    assert sign == np.sign(REFERENCE.margin(poses[-1], joints[-1]))
+    # The test's own continuation follows the joints: on the constraints,
+    # one sign of det Jx above the planner's margin threshold, no jump to
+    # another solution, through the planned poses to the goal's mode.
+    dense, waypoints = _densified(joints, 0.05)
+    followed, vertices = REFERENCE.follow(poses[0], dense, steps=10)
+    before = (joints[0], poses[0])
+    for at, pose, move in followed:
+        assert np.max(np.abs(REFERENCE.residual(pose, at))) < 1e-9 * REFERENCE.scale**2
+        assert np.sign(REFERENCE.margin(pose, at)) == sign
+        assert abs(REFERENCE.margin(pose, at)) > 1e-3
+        if move > 0.1:
+            # Near a fold the pose moves fast: fifty times finer steps must
+            # arrive at the same pose, else Newton jumped to another solution.
+            _, finer = REFERENCE.follow(before[1], np.array([before[0], at]), steps=50)
+            assert np.max(np.abs(finer[-1] - pose)) < 1e-6
+        before = (at, pose)
+    for vertex, planned in zip([vertices[k] for k in waypoints], poses):
+        assert np.max(np.abs(np.r_[vertex[:2] - planned[:2], wrap(vertex[2] - planned[2])])) \
+            < 1e-6
+    # The driver executes it: from the first mode to the second.
+    reset = _wait(three_rrr.reset_client.call_async(ResetDriver.Request(
+        configuration=_rrr(MODE_A))))
+    assert reset.success, reset.error_msg
+    assert three_rrr.action_client.wait_for_server(timeout_sec=TIMEOUT)
+    handle = _wait(three_rrr.action_client.send_goal_async(ExecuteTrajectory.Goal(
+        trajectory=trajectory)))
+    assert handle.accepted
+    result = _wait(handle.get_result_async()).result
+    assert result.error_code == ExecuteTrajectory.Result.SUCCESS, result.error_msg
+    assert abs(wrap(result.final_pose.values[2] - MODE_B)) < 1e-3
+    assert result.min_singularity_margin > 1e-3
+    # Its joint states carry the 3-RRR's joints; its markers draw each leg
+    # from its base joint through its elbow to the platform.
+    deadline = time.monotonic() + 10.0
+    while not (three_rrr.joint_states and three_rrr.markers) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert list(three_rrr.joint_states[-1].name) == TH_NAMES
+    legs = {m.ns: m for m in three_rrr.markers[-1].markers}["legs"]
+    segments = np.array([[p.x, p.y] for p in legs.points]).reshape(3, 2, 2, 2)
+    np.testing.assert_allclose(segments[:, 0, 0], _A)
+    np.testing.assert_allclose(segments[:, 0, 1], segments[:, 1, 0])
+    np.testing.assert_allclose(np.linalg.norm(segments[:, 0, 1] - _A, axis=1), _RRR["l1"])
+    np.testing.assert_allclose(np.linalg.norm(segments[:, 1, 1] - segments[:, 1, 0], axis=1),
+                               _RRR["l2"])
+
+
+def test_the_three_rrr_planner_refuses_the_joints_of_another_mechanism(three_rrr):
+    legs = Configuration(joint_names=["rho1", "rho2", "rho3"], positions=list(TH), mode=MODE_A)
+    response = three_rrr.plan(legs, _rrr(MODE_B))
+    assert response.error_code == PlanPath.Response.ERROR_INVALID_INPUT, response.error_msg
+    assert "th1" in response.error_msg
+    off_slice = Configuration(positions=[0.5, *TH[1:]], mode=MODE_A)
+    response = three_rrr.plan(off_slice, _rrr(MODE_B))
+    assert response.error_code == PlanPath.Response.ERROR_RHO1_MISMATCH, response.error_msg
+
+
+def test_the_five_bar_refuses_an_assembly_mode_change_as_other_aspect(ros_context):
+    # Its 2-D roadmap is the whole torus of its two joints: full.
+    suite = Suite(ros_context, FIVE_BAR, "five_bar", [Parameter("full", value=True)])
+    try:
+        assert suite.planner.planner.roadmap.grid.shape == (120, 120)
+        plus = Configuration(positions=list(FIVE_BAR_TH), mode=PLUS_Y)
+        minus = Configuration(positions=list(FIVE_BAR_TH), mode=MINUS_Y)
+        for feasibility_only in (True, False):
+            response = suite.plan(plus, minus, feasibility_only=feasibility_only)
+            assert response.error_code == PlanPath.Response.ERROR_INFEASIBLE, response.error_msg
+            assert response.feasibility == PlanPath.Response.FEASIBILITY_OTHER_ASPECT
+            assert not response.trajectory.points
+        # The same mode across the seam of th1 is planned.
+        across = Configuration(positions=[-3.1, 2.5], mode=0.10985067)
+        response = suite.plan(plus, across)
+        assert response.success, response.error_msg
+        assert list(response.trajectory.joint_names) == ["th1", "th2"]
+        assert not response.roadmap_fixed_joints
+        assert math.isclose(response.trajectory.points[0].positions[0], 3.1, abs_tol=1e-9)
+    finally:
+        suite.close()
