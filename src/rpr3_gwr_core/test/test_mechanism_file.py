@@ -67,10 +67,18 @@ def _document(**changes):
                        {"name": "th2", "periodic": True, "cells": 9}]), "give 'min'"),
     (_document(joints=[{"name": "th1", "min": "a", "max": 1, "step": 0.1},
                        {"name": "th2", "periodic": True, "cells": 9}]), "must be a number"),
+    (_document(bodies={"leg_colour": "red"}), "unknown body keys"),
+    (_document(bodies=[1]), "must be a mapping"),
 ])
 def test_malformed_documents_are_refused(document, reason):
     with pytest.raises(InvalidInputError, match=reason):
         mechanism_file_from_dict(document)
+
+
+def test_a_file_may_put_the_legs_in_one_layer():
+    described = mechanism_file_from_dict(_document(bodies={"leg_layers": [1, 1]}))
+    assert described.bodies.leg_layers == (1, 1)
+    assert mechanism_file_from_dict(_document()).bodies is None
 
 
 @pytest.mark.parametrize("fixed, reason", [

@@ -8,7 +8,11 @@ writes them; lengths in the mechanism's length unit, angles in radians).
 ``name`` (the mechanism's joint name) and either a range sampled by a step
 (``min``, ``max``, ``step``) or, for a revolute joint that turns freely,
 ``periodic: true`` with the number of ``cells`` of its full turn, starting at
-``-pi``.  ``config/`` holds one file per mechanism the suite knows.
+``-pi``.  An optional ``bodies`` key gives the widths and layers of its
+bodies against obstacles and each other (:class:`~rpr3_gwr_core.world.BodyModel`:
+``leg_width``, ``leg_layers``, ``platform_width``, ...; by default each leg
+in a layer of its own, so legs never meet).  ``config/`` holds one file per
+mechanism the suite knows.
 """
 
 from dataclasses import dataclass
@@ -30,10 +34,13 @@ class MechanismFile:
     mechanism : Mechanism
     axes : tuple of Axis
         One per joint, in the mechanism's joint order.
+    bodies : BodyModel or None
+        The file's ``bodies``, None without one (the defaults).
     """
 
     mechanism: Mechanism
     axes: tuple
+    bodies: object = None
 
     def grid(self, fixed=None):
         """The grid over the box with some joints fixed.
@@ -101,8 +108,10 @@ def mechanism_file_from_dict(document):
     InvalidInputError
         If it does not describe a mechanism and its box.
     """
-    if not isinstance(document, dict) or set(document) != {"mechanism", "joints"}:
-        raise InvalidInputError("a mechanism file has the keys 'mechanism' and 'joints'")
+    if not isinstance(document, dict) or not {"mechanism", "joints"} <= set(document) \
+            or not set(document) <= {"mechanism", "joints", "bodies"}:
+        raise InvalidInputError("a mechanism file has the keys 'mechanism' and 'joints', "
+                                "and may have 'bodies'")
     mechanism = mechanism_from_dict(document["mechanism"])
     joints = document["joints"]
     names = mechanism.joint_names
@@ -113,7 +122,12 @@ def mechanism_file_from_dict(document):
         if not isinstance(joint, dict) or joint.get("name") != name:
             raise InvalidInputError(f"joint {k} of 'joints' must be named {name!r}")
         axes.append(_axis(k, joint))
-    return MechanismFile(mechanism=mechanism, axes=tuple(axes))
+    bodies = None
+    if "bodies" in document:
+        from ..world import body_model_from_dict  # the world loads only when a file needs it
+
+        bodies = body_model_from_dict(document["bodies"])
+    return MechanismFile(mechanism=mechanism, axes=tuple(axes), bodies=bodies)
 
 
 def _axis(k, joint):
