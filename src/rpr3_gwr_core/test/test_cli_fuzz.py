@@ -289,3 +289,19 @@ def test_the_console_script_fails_with_one_line(argv, reason, console_script):
                           check=False)
     assert done.returncode == 2 and done.stdout == ""
     assert done.stderr.count("\n") == 1 and reason in done.stderr
+
+
+@pytest.mark.parametrize("argv, code", [(["dk", "17", "20", "25"], 0), (["--help"], 0),
+                                        (["dk", "17", "20", "-3"], 2)])
+def test_the_console_script_ends_with_its_whole_answer(argv, code, console_script):
+    # It ends with os._exit once its answer is flushed: the answer must be
+    # whole and the exit code the command's.
+    done = subprocess.run([console_script, *argv], capture_output=True, text=True, timeout=120,
+                          check=False)
+    assert done.returncode == code
+    if argv[0] == "dk" and code == 0:
+        assert len(json.loads(done.stdout)) == 4 and done.stderr == ""
+    elif code == 0:
+        assert done.stdout.startswith("usage: rpr3-gwr")
+    else:
+        assert done.stdout == "" and done.stderr.count("\n") == 1

@@ -9,15 +9,19 @@ Entries
 An entry is a folder named by :func:`cache_key` holding one ``.npy`` file per
 array of :func:`~rpr3_gwr_core.io.export.roadmap_arrays` (``links`` as
 ``links_0``, ``links_1``, ...), one per array of the roadmap's planning index
-(:func:`~rpr3_gwr_core.planning.planning_index`, as ``index_<name>``), and
+(:func:`~rpr3_gwr_core.planning.planning_index`, as ``index_<name>``), one
+per table of its segmentation
+(:meth:`~rpr3_gwr_core.workspace.segmentation.Segmentation.tables`, as
+``table_<name>``) with ``patch_area``, each patch's area, so that a load
+derives neither patches, gates nor the cells' volumes, and
 ``header.json``: the mechanism and grid documents, each array's dtype, shape
 and CRC-32, and a CRC-32 of the header itself.  It is written to a staging
 folder (``<key>.<random>.tmp``) and renamed into place, so a reader finds an
 entry whole or not at all.
 
 The arrays are mapped, copy on write, rather than read: processes that load
-one entry share its pages (the full 3-DOF roadmap's arrays and index, about
-0.6 GB), and nothing a process writes into them reaches the files or another
+one entry share its pages (the full 3-DOF roadmap's entry, about 0.9 GB),
+and nothing a process writes into them reaches the files or another
 process.  :func:`save_planning_files` and :func:`map_planning_files` write
 and map the same files outside the cache, for a roadmap that came from
 elsewhere (the planner node's, received as messages).
@@ -31,7 +35,9 @@ rely on and :func:`~rpr3_gwr_core.io.export.roadmap_from_arrays` does not
 check: counts within ``0..max_solutions``, poses and margins finite exactly
 where a solution exists, a sample of margins equal to the mechanism's margin
 of their poses (a flipped sign would flip an aspect), region ids non-negative
-and 0 on cells without solutions, patch ids 0 where there is no solution.
+and 0 on cells without solutions, patch ids 0 where there is no solution,
+and the tables against the patch ids
+(:meth:`~rpr3_gwr_core.workspace.segmentation.Segmentation.from_tables`).
 An entry that fails is removed and rebuilt, with a :class:`CacheWarning`
 naming the entry and what failed.  The checksums are CRC-32 (:mod:`zlib`)
 rather than a cryptographic hash: they are there to catch damage, not
@@ -44,7 +50,7 @@ Whenever an entry is stored, the least recently used entries (loading an
 entry touches its folder) are removed until the entries total at most
 ``max_bytes`` (:func:`default_max_bytes`: ``$RPR3_GWR_CACHE_MAX_BYTES``, else
 :data:`DEFAULT_MAX_BYTES`, 4 GiB: the full 3-DOF roadmap's entry of about
-400 MB and about a hundred 36 MB entries of 0.125 slices).  The entry just
+0.9 GB and about fifty 66 MB entries of 0.125 slices).  The entry just
 stored is kept even if it alone exceeds the bound.  Only folders named as
 entries count and are removed; staging folders are left to the processes
 writing them unless they are older than :data:`STALE_STAGING_SECONDS` (left
@@ -58,6 +64,7 @@ in the way), the roadmap is built and returned without being stored, with a
 :class:`CacheWarning`.
 """
 
+from concurrent.futures import ThreadPoolExecutor
 import hashlib
 import json
 import math
@@ -73,11 +80,10 @@ import zlib
 import numpy as np
 
 from ..exceptions import InvalidInputError
-from ..mechanisms import mechanism_from_dict
 from ..planning.index import INDEX_TYPES, PlanningIndex
 from ..planning.planner import planning_index
 from ..workspace import build_roadmap, refine
-from ..workspace.adaptive import grid_from_dict
+from ..workspace.segmentation import TABLE_TYPES
 from .export import FIELD_TYPES, FORMAT, VERSION, roadmap_arrays, roadmap_from_arrays
 from .paths import default_cache_dir
 
@@ -89,7 +95,7 @@ __all__ = ["CacheWarning", "DEFAULT_MAX_BYTES", "STALE_STAGING_SECONDS", "defaul
 ALGORITHM_REVISION = 5
 # Bump when the files of an entry change, so old entries are misses (evicted in
 # their turn) rather than damaged entries.
-ENTRY_LAYOUT = 4
+ENTRY_LAYOUT = 5
 
 DEFAULT_MAX_BYTES = 4 * 2**30
 """Default bound of the cache's entries [bytes]."""
@@ -100,7 +106,14 @@ largest entry takes seconds."""
 
 _LINK_TYPE = "<i1"
 _INDEX_PREFIX = "index_"
+_TABLE_PREFIX = "table_"
+_AREA = "patch_area"
+_AREA_TYPE = "<f8"
 _MARGIN_SAMPLES = 4096
+_POSE_CHUNK = 32768
+# Arrays read and checksummed at once: CRC-32 releases the GIL, and the
+# checksums are most of a large entry's load.
+_READERS = max(1, min(4, os.cpu_count() or 1))
 _ENTRY_NAME = re.compile(r"[0-9a-f]{24}")
 _STAGING_NAME = re.compile(r"[0-9a-f]{24}\..+\.tmp")
 
@@ -299,6 +312,11 @@ def _save(folder, roadmap, index):
                   for k, match in enumerate(arrays["links"])})
     named.update({_INDEX_PREFIX + name: np.ascontiguousarray(array, dtype=INDEX_TYPES[name])
                   for name, array in index.arrays().items()})
+    tables = roadmap.segmentation.tables()
+    named.update({_TABLE_PREFIX + name: np.ascontiguousarray(array, dtype=TABLE_TYPES[name])
+                  for name, array in tables.items()})
+    areas = [roadmap.graph.nodes[pid]["area"] for pid in tables["patch_ids"].tolist()]
+    named[_AREA] = np.array(areas, dtype=_AREA_TYPE)
     listing = {}
     for name, array in named.items():
         np.save(os.path.join(folder, name + ".npy"), array)
@@ -321,18 +339,21 @@ def _load(folder, expected=None):
         except ValueError as exc:
             raise InvalidInputError(f"header.json is not JSON: {exc}") from exc
     _check_header(header, expected)
-    arrays = {name: _read(folder, name, spec) for name, spec in header["arrays"].items()}
-    index = {name[len(_INDEX_PREFIX):]: arrays.pop(name) for name in list(arrays)
-             if name.startswith(_INDEX_PREFIX)}
+    listing = header["arrays"]
+    # Largest first, so that no large one is left to the end alone.
+    names = sorted(listing, key=lambda name: -math.prod(listing[name]["shape"]))
+    with ThreadPoolExecutor(max_workers=_READERS) as pool:
+        arrays = dict(zip(names, pool.map(lambda name: _read(folder, name, listing[name]),
+                                          names)))
+    index, tables = ({name[len(prefix):]: arrays.pop(name) for name in list(arrays)
+                      if name.startswith(prefix)} for prefix in (_INDEX_PREFIX, _TABLE_PREFIX))
+    areas = arrays.pop(_AREA)
     arrays["links"] = [arrays.pop(f"links_{k}")
                        for k in range(len(arrays) - len(FIELD_TYPES))]
-    try:
-        mechanism = mechanism_from_dict(header["mechanism"])
-        grid = grid_from_dict(header["grid"])
-    except (KeyError, TypeError, ValueError) as exc:
-        raise InvalidInputError(f"header.json names no mechanism or grid: {exc}") from exc
-    _check_values(mechanism, grid, arrays)
-    roadmap = roadmap_from_arrays(header["mechanism"], header["grid"], arrays)
+    # Nothing compiled reads the arrays before their values are checked:
+    # the tables spare the derivations that would.
+    roadmap = roadmap_from_arrays(header["mechanism"], header["grid"], arrays, tables, areas)
+    _check_values(roadmap.mechanism, roadmap.grid, arrays)
     return roadmap, PlanningIndex.from_arrays(roadmap, index)
 
 
@@ -344,13 +365,14 @@ def _check_header(header, expected):
     if expected is not None:
         _check_names(header, *expected)
     listing = header["arrays"]
-    index_names = {_INDEX_PREFIX + name: dtype for name, dtype in INDEX_TYPES.items()}
-    n_links = len(listing) - len(FIELD_TYPES) - len(index_names) \
-        if isinstance(listing, dict) else 0
-    types = dict(FIELD_TYPES, **index_names,
-                 **{f"links_{k}": _LINK_TYPE for k in range(n_links)})
+    others = dict({_INDEX_PREFIX + name: dtype for name, dtype in INDEX_TYPES.items()},
+                  **{_TABLE_PREFIX + name: dtype for name, dtype in TABLE_TYPES.items()},
+                  **{_AREA: _AREA_TYPE})
+    n_links = len(listing) - len(FIELD_TYPES) - len(others) if isinstance(listing, dict) else 0
+    types = dict(FIELD_TYPES, **others, **{f"links_{k}": _LINK_TYPE for k in range(n_links)})
     if n_links < 1 or set(listing) != set(types):
-        raise InvalidInputError("header.json lists other arrays than a roadmap's and its index's")
+        raise InvalidInputError("header.json lists other arrays than a roadmap's, its "
+                                "segmentation's and its index's")
     for name, spec in listing.items():
         if (not isinstance(spec, dict) or set(spec) != {"dtype", "shape", "crc32"}
                 or spec["dtype"] != np.dtype(types[name]).str
@@ -420,9 +442,14 @@ def _check_values(mechanism, grid, arrays):
     if not np.array_equal(np.isfinite(margin), valid):
         raise InvalidInputError("margins are not finite exactly where a solution exists")
     # A NaN or an infinity in any coordinate makes the sum non-finite; summed
-    # coordinate by coordinate, five times faster than reducing the short axis.
-    if not np.array_equal(np.isfinite(sum(poses[..., k] for k in range(pose_size))), valid):
-        raise InvalidInputError("poses are not finite exactly where a solution exists")
+    # coordinate by coordinate, five times faster than reducing the short
+    # axis, and in chunks: temporaries the size of the poses would cost more
+    # in fresh pages than the sums.
+    for start in range(0, n, _POSE_CHUNK):
+        part = poses[start:start + _POSE_CHUNK]
+        if not np.array_equal(np.isfinite(sum(part[..., k] for k in range(pose_size))),
+                              valid[start:start + _POSE_CHUNK]):
+            raise InvalidInputError("poses are not finite exactly where a solution exists")
     if region.min(initial=0) < 0 or region[count == 0].any():
         raise InvalidInputError("region ids are negative or on cells without solutions")
     if patch[~valid].any():

@@ -3,6 +3,7 @@
 Subcommands::
 
     rpr3-gwr dk RHO1 RHO2 RHO3
+    rpr3-gwr dk --mechanism FILE.yaml JOINT [JOINT ...]
     rpr3-gwr roadmap [--rho1 17] [--rho2 MIN MAX] [--rho3 MIN MAX] [--step 0.125]
                      [--method components|rds] [-o FILE] [--gexf FILE]
                      [--field-figure FILE] [--roadmap-figure FILE]
@@ -15,6 +16,7 @@ Subcommands::
                   [the options above]
     rpr3-gwr plot PLAN.json [-o FIGURE]
     rpr3-gwr cusps [--rho1 17] [--cache-dir DIR]
+    rpr3-gwr cusps --mechanism FILE.yaml --fix NAME=VALUE [...] [--cache-dir DIR]
     rpr3-gwr cusps --trace RHO1_MIN RHO1_MAX RHO1_STEP [--step 0.25]
 
 Results go to stdout as JSON; bad arguments exit with code 2 and one line on
@@ -23,7 +25,10 @@ stderr (legs longer than 1e6 length units, a grid over
 give a roadmap, a file that cannot be read or written); a plan that cannot be
 made prints an ``error`` object with a code and a message and exits with 1;
 progress is shown on stderr when it is a terminal.
-``plan`` and ``plot`` keep built roadmaps in the cache of
+``--mechanism FILE.yaml`` names a robot of one's own
+(:mod:`~rpr3_gwr_core.io.mechanism_file`) instead of the paper's 3-RPR;
+``cusps`` takes it when it has cusp equations.
+``plan``, ``plot`` and ``cusps`` keep built roadmaps in the cache of
 :mod:`~rpr3_gwr_core.cache` (``--cache-dir``).  ``--full`` takes the full
 3-DOF roadmap, all three legs free (:data:`~rpr3_gwr_core.paper.FULL_BASE_GRID`
 refined :data:`~rpr3_gwr_core.paper.FULL_REFINEMENT` times), from the cache.
@@ -111,9 +116,13 @@ def _figure(path):
 def _parser():
     parser = _Parser(prog="rpr3-gwr", description="Global workspace roadmap of the 3-RPR.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    dk = sub.add_parser("dk", help="all direct-kinematic solutions of (rho1, rho2, rho3)")
-    for name in ("rho1", "rho2", "rho3"):
-        dk.add_argument(name, type=_leg)
+    dk = sub.add_parser("dk", help="all direct-kinematic solutions of (rho1, rho2, rho3), or "
+                                   "of the joints of --mechanism")
+    dk.add_argument("joints", type=_leg, nargs="+", metavar="JOINT",
+                    help="RHO1 RHO2 RHO3, or with --mechanism every joint of the file "
+                         "(angles in radians)")
+    dk.add_argument("--mechanism", metavar="FILE.yaml",
+                    help="a robot of your own (config/*.yaml) instead of the paper's 3-RPR")
     roadmap = sub.add_parser("roadmap", help="build the roadmap and print a JSON summary")
     # The paper's slice; defaults filled in by the command, so that a
     # --mechanism run can refuse them.
@@ -167,12 +176,13 @@ def _parser():
     plan.add_argument("--cache-dir", help="roadmap cache (default: %(default)s)",
                       default=default_cache_dir())
     cusps = sub.add_parser("cusps", help="the cusp points of the singular curve at rho1")
-    cusps.add_argument("--rho1", type=_leg, default=17.0)
+    cusps.add_argument("--rho1", type=_leg, help="default 17")
+    _mechanism_options(cusps)
     cusps.add_argument("--cache-dir", default=default_cache_dir())
     cusps.add_argument("--trace", type=_finite, nargs=3, metavar=("MIN", "MAX", "STEP"),
                        help="trace the cusp curves across rho1 (slices at this many values)")
-    cusps.add_argument("--step", type=_finite, default=0.25,
-                       help="with --trace: grid step of each slice")
+    cusps.add_argument("--step", type=_finite, help="with --trace: grid step of each slice "
+                                                    "(default 0.25)")
     plot = sub.add_parser("plot", help="draw a plan written by 'rpr3-gwr plan'")
     plot.add_argument("plan_file", metavar="PLAN.json")
     plot.add_argument("-o", "--output", type=_figure,
@@ -182,7 +192,30 @@ def _parser():
 
 
 def main(argv=None):
-    """Entry point of ``rpr3-gwr``; returns the process exit code."""
+    """Entry point of ``rpr3-gwr``: runs the command of ``argv`` and returns
+    the process exit code.
+
+    Without ``argv`` (the process's own arguments, as the console script
+    runs it) the process ends once its answer is written and flushed, with
+    :func:`os._exit`: the interpreter's teardown would unload the compiled
+    kernels one by one, a third of a second and more, for nothing (every file
+    is written and closed by then, no thread is left running).
+    """
+    if argv is not None:
+        return _run(argv)
+    try:
+        code = _run(None)
+    except SystemExit as stop:  # argparse's exits: --help and argument errors
+        code = stop.code if isinstance(stop.code, int) else int(stop.code is not None)
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except BrokenPipeError:
+            code = 1
+    os._exit(code)
+
+
+def _run(argv):
     parser = _parser()
     args = parser.parse_args(argv)
     # Imported once the arguments are read: the commands load numpy and the

@@ -1,4 +1,8 @@
-"""The subcommands of ``rpr3-gwr`` (:mod:`.cli` parses their arguments)."""
+"""The subcommands of ``rpr3-gwr`` (:mod:`.cli` parses their arguments).
+
+Each command imports what only it needs when it runs (the planner, the cache,
+the cusps, figures): a fresh process pays for its own command alone.
+"""
 
 import json
 import math
@@ -9,16 +13,16 @@ import time
 import numpy as np
 
 from ..exceptions import GWRError, InvalidInputError
-from ..mechanisms import mechanism_from_dict
+from ..mechanisms import Mechanism, mechanism_from_dict
 from ..paper import FULL_BASE_GRID, FULL_REFINEMENT, PAPER_GEOMETRY, rho1_slice
-from ..planning import NEVER, PlanOptions, Planner, Termination
 from ..workspace import Grid, build_roadmap
-from ..workspace.cusps import cusp_curves, find_cusps
 from ..workspace.grid import check_roadmap_grid
-from .cache import cached_planning, cached_roadmap
 from .cli import MAX_LEG
 
 __all__ = ["run"]
+
+# Grid step of the slices of ``cusps --trace`` [length unit].
+_TRACE_STEP = 0.25
 
 
 def run(args):
@@ -45,30 +49,70 @@ class _Progress:
 
 
 def _cusps(args):
+    from ..workspace.cusps import cusp_curves, find_cusps
+    from .cache import cached_roadmap
+
+    _paper_slice_options(args, ("rho1",))
+    if args.mechanism is not None and (args.trace or args.step is not None):
+        raise InvalidInputError(f"{'--trace' if args.trace else '--step'}: the paper's 3-RPR "
+                                "across rho1; with --mechanism the slice is the file's box "
+                                "and --fix")
     if args.trace:
         low, high, step = args.trace
         if not (0 < low <= high <= MAX_LEG and step > 0) or (high - low) / step > 1000:
             raise InvalidInputError(f"--trace takes 0 < MIN <= MAX <= {MAX_LEG:g} and a STEP "
                                     "giving at most 1000 slices")
         values = low + step * np.arange(int(math.floor((high - low) / step + 1e-9)) + 1)
-        slices = [build_roadmap(PAPER_GEOMETRY, rho1_slice(float(v), step=args.step))
+        slice_step = _TRACE_STEP if args.step is None else args.step
+        slices = [build_roadmap(PAPER_GEOMETRY, rho1_slice(float(v), step=slice_step))
                   for v in values]
         return {"curves": [[c.to_dict(PAPER_GEOMETRY) for c in curve]
                            for curve in cusp_curves(slices)]}
-    roadmap, _ = cached_roadmap(PAPER_GEOMETRY, rho1_slice(args.rho1), args.cache_dir,
-                                _Progress(sys.stderr))
-    return [c.to_dict(PAPER_GEOMETRY) for c in find_cusps(roadmap)]
+    if args.mechanism is None:
+        mechanism, grid = PAPER_GEOMETRY, rho1_slice(args.rho1)
+    else:
+        mechanism, grid = _file_roadmap(args)
+        # Refused before the roadmap is built: without its own equations the
+        # mechanism would fail at the first seed.
+        if type(mechanism).refine_cusp is Mechanism.refine_cusp:
+            raise InvalidInputError(f"the {mechanism.kind} has no cusp equations: 'cusps' "
+                                    "takes mechanisms that have them (the 3-RPR)")
+        if grid.ndim != 2:
+            raise InvalidInputError(f"cusps are points of 2-D slices: --fix all joints but "
+                                    f"two (the grid has {grid.ndim} axes)")
+    roadmap, _ = cached_roadmap(mechanism, grid, args.cache_dir, _Progress(sys.stderr))
+    try:
+        cusps = find_cusps(roadmap)
+    except NotImplementedError as exc:
+        raise InvalidInputError(f"{exc}: 'cusps' takes mechanisms with cusp equations") from None
+    return [c.to_dict(mechanism) for c in cusps]
 
 
 def _dk(args):
-    poses = PAPER_GEOMETRY.direct_kinematics(np.array([args.rho1, args.rho2, args.rho3]))
-    signs = PAPER_GEOMETRY.aspect(poses) if len(poses) else []
-    return [{"x": float(p[0]), "y": float(p[1]), "alpha": float(p[2]), "aspect": int(s)}
+    if args.mechanism is not None:
+        from .mechanism_file import load_mechanism_file
+
+        mechanism = load_mechanism_file(args.mechanism).mechanism
+    else:
+        mechanism = PAPER_GEOMETRY
+    names = mechanism.joint_names
+    if len(args.joints) != len(names):
+        raise InvalidInputError(f"dk takes the {len(names)} joints "
+                                f"{' '.join(n.upper() for n in names)} (all required), "
+                                f"got {len(args.joints)}")
+    joints = np.array([args.joints], dtype=float)
+    mechanism.check_joints(joints)
+    count, poses = mechanism.solve(joints)
+    poses = poses[0, :count[0]]
+    signs = mechanism.aspect(poses, np.repeat(joints, len(poses), axis=0)) if len(poses) else []
+    return [{**{name: float(v) for name, v in zip(mechanism.pose_names, p)}, "aspect": int(s)}
             for p, s in zip(poses, signs)]
 
 
 def _full_roadmap(cache_dir):
     """The full 3-DOF roadmap, its planning index, and whether they came from the cache."""
+    from .cache import cached_planning
+
     return cached_planning(PAPER_GEOMETRY, FULL_BASE_GRID, cache_dir, _Progress(sys.stderr),
                            refinement=FULL_REFINEMENT)
 
@@ -79,6 +123,8 @@ def _roadmap(args):
     _paper_slice_options(args, ("rho1", "rho2", "rho3", "step"))
     start = time.perf_counter()
     if args.mechanism is not None:
+        from .cache import cached_roadmap
+
         mechanism, grid = _file_roadmap(args)
         roadmap, hit = cached_roadmap(mechanism, grid, args.cache_dir, _Progress(sys.stderr))
         if args.slice_figure:
@@ -99,6 +145,7 @@ def _roadmap(args):
     summary["timings"] = dict(roadmap.timings, total=time.perf_counter() - start)
     summary["from_cache"] = hit
     if args.slice_figure:
+        from ..workspace.cusps import find_cusps
         from .figures import slice_figure
 
         cusps = find_cusps(build_roadmap(PAPER_GEOMETRY, rho1_slice(args.slice_rho1, step=0.25)))
@@ -160,6 +207,9 @@ def _file_roadmap(args):
 
 
 def _plan(args):
+    from ..planning import PlanOptions
+    from .cache import cached_planning
+
     _paper_slice_options(args, ("rho1",))
     if args.mechanism is not None:
         return _plan_on_file(args)
@@ -192,6 +242,9 @@ def _plan(args):
 
 
 def _plan_on_file(args):
+    from ..planning import PlanOptions
+    from .cache import cached_planning
+
     mechanism, grid = _file_roadmap(args)
     start, goal = tuple(args.start), tuple(args.goal)
     for name, values in (("start", start), ("goal", goal)):
@@ -212,6 +265,8 @@ def _plan_on_file(args):
 
 def _answer(args, roadmap, index, start, goal, options, roadmap_doc):
     """The plan's JSON and exit code (1 when there is no plan)."""
+    from ..planning import NEVER, Planner, Termination
+
     header = {"roadmap": roadmap_doc, "request": {"start": list(start), "goal": list(goal)}}
     begin = time.perf_counter()
     try:
@@ -262,6 +317,7 @@ def _read_plan(path):
 
 
 def _plot(args):
+    from .cache import cached_roadmap
     from .figures import plan_figure
 
     mechanism, grid, plan = _read_plan(args.plan_file)

@@ -86,7 +86,7 @@ def roadmap_summary(roadmap, with_faces=False):
     for pid, patch in sorted(seg.patches.items()):
         entry = {"id": pid, "region": patch.region, "layer": patch.layer,
                  "aspect": patch.aspect, "n_solutions": patch.n_solutions,
-                 "cells": int(patch.cells.size), "area": seg.field.grid.volume_of(patch.cells)}
+                 "cells": int(patch.cells.size), "area": roadmap.graph.nodes[pid]["area"]}
         if with_faces:
             entry["gate_cells"] = patch.gate_cells.tolist()
             entry["singular_cells"] = patch.singular_cells.tolist()
@@ -134,14 +134,28 @@ def roadmap_arrays(roadmap):
             "links": [match for _, _, match in seg.links]}
 
 
-def roadmap_from_arrays(mechanism_dict, grid_dict, arrays):
+def roadmap_from_arrays(mechanism_dict, grid_dict, arrays, tables=None, areas=None):
     """A roadmap from its mechanism and grid documents and its arrays
-    (:func:`roadmap_arrays`); patches and gates are derived from the arrays.
+    (:func:`roadmap_arrays`); patches and gates are derived from the arrays,
+    or taken from ``tables`` when given.
+
+    Parameters
+    ----------
+    mechanism_dict, grid_dict : dict
+        :meth:`Mechanism.to_dict` and the grid's ``to_dict()``.
+    arrays : dict
+        :func:`roadmap_arrays`.
+    tables : dict of str to ndarray, optional
+        The segmentation's
+        :meth:`~rpr3_gwr_core.workspace.segmentation.Segmentation.tables`.
+    areas : ndarray of float, optional
+        With ``tables``: each patch's area, in the order of its
+        ``patch_ids``.
 
     Raises
     ------
     InvalidInputError
-        If the arrays do not fit the grid.
+        If the arrays do not fit the grid, or the tables the arrays.
     """
     try:
         mechanism = mechanism_from_dict(mechanism_dict)
@@ -150,17 +164,22 @@ def roadmap_from_arrays(mechanism_dict, grid_dict, arrays):
         shapes = {"count": (n,), "poses": (n, slots, size), "margin": (n, slots),
                   "region": (n,), "patch": (n, slots)}
         array = {name: np.asarray(arrays[name]).reshape(shape) for name, shape in shapes.items()}
-        faces = grid.pairs()
-        if len(arrays["links"]) != len(faces):
-            raise InvalidInputError("links do not match the grid's axes")
-        links = [np.asarray(m).reshape(lo.size, slots)
-                 for (lo, _), m in zip(faces, arrays["links"])]
+        links = [np.asarray(m).reshape(-1, slots) for m in arrays["links"]]
     except (KeyError, TypeError, ValueError) as exc:
         raise InvalidInputError(f"malformed roadmap arrays: {exc}") from exc
     field = NSolutionField(mechanism=mechanism, grid=grid, count=array["count"],
                            poses=array["poses"], margin=array["margin"])
-    segmentation = Segmentation.from_arrays(field, array["region"], array["patch"], links)
-    return Roadmap(segmentation=segmentation, graph=roadmap_graph(segmentation), timings={})
+    if tables is None:
+        segmentation = Segmentation.from_arrays(field, array["region"], array["patch"], links)
+        return Roadmap(segmentation=segmentation, graph=roadmap_graph(segmentation), timings={})
+    segmentation = Segmentation.from_tables(field, array["region"], array["patch"], links,
+                                            tables)
+    ids = tables["patch_ids"]
+    if areas is None or np.shape(areas) != ids.shape or not np.all(np.isfinite(areas)) \
+            or not np.all(np.asarray(areas) > 0):
+        raise InvalidInputError("the patches' areas are not a positive number per patch")
+    graph = roadmap_graph(segmentation, dict(zip(ids.tolist(), np.asarray(areas).tolist())))
+    return Roadmap(segmentation=segmentation, graph=graph, timings={})
 
 
 def roadmap_to_json(roadmap, include_field=True):

@@ -1,12 +1,49 @@
 """Mechanisms: the interface the roadmap and the planner use, the 3-RPR,
 the five-bar, the 3-RRR and the 3-PRR."""
 
-from .base import Mechanism, mechanism_from_dict, register_mechanism
-from .five_bar import DEFAULT_FIVE_BAR, FiveBar
-from .prr3 import DEFAULT_THREE_PRR, ThreePRR
-from .rpr3 import PAPER_GEOMETRY, ThreeRPR
-from .rrr3 import DEFAULT_THREE_RRR, ThreeRRR
+import importlib
 
-__all__ = ["Mechanism", "mechanism_from_dict", "register_mechanism", "ThreeRPR",
-           "PAPER_GEOMETRY", "FiveBar", "DEFAULT_FIVE_BAR", "ThreeRRR",
-           "DEFAULT_THREE_RRR", "ThreePRR", "DEFAULT_THREE_PRR"]
+from . import base
+from .base import Mechanism, register_mechanism
+
+# Each mechanism's module is loaded on first use of one of its names or
+# documents (PEP 562): it loads its compiled kernels, which a process
+# working with another mechanism does not need.
+_MODULES = {
+    ".rpr3": ("3-RPR", ("ThreeRPR", "PAPER_GEOMETRY")),
+    ".five_bar": ("5R", ("FiveBar", "DEFAULT_FIVE_BAR")),
+    ".rrr3": ("3-RRR", ("ThreeRRR", "DEFAULT_THREE_RRR")),
+    ".prr3": ("3-PRR", ("ThreePRR", "DEFAULT_THREE_PRR")),
+}
+_MODULE_OF_NAME = {name: module for module, (_, names) in _MODULES.items() for name in names}
+_MODULE_OF_KIND = {kind: module for module, (kind, _) in _MODULES.items()}
+
+__all__ = ["Mechanism", "mechanism_from_dict", "register_mechanism", *_MODULE_OF_NAME]
+
+
+def mechanism_from_dict(data):
+    """Rebuild a mechanism from :meth:`Mechanism.to_dict`'s plain data
+    (:func:`.base.mechanism_from_dict`), its module loaded first.
+
+    Raises
+    ------
+    InvalidInputError
+        If the data names no known kind or its parameters are invalid.
+    """
+    kind = data.get("kind") if isinstance(data, dict) else None
+    # An unknown kind loads them all, so that the error lists every kind.
+    for module in [_MODULE_OF_KIND[kind]] if kind in _MODULE_OF_KIND else _MODULES:
+        importlib.import_module(module, __name__)
+    return base.mechanism_from_dict(data)
+
+
+def __getattr__(name):
+    if name not in _MODULE_OF_NAME:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(_MODULE_OF_NAME[name], __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

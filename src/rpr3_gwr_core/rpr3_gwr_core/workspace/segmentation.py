@@ -52,6 +52,7 @@ give identical patches, gates and boundaries.
 
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field as dataclass_field
+import functools
 
 import numba
 import numpy as np
@@ -62,9 +63,16 @@ from ..exceptions import InvalidInputError
 from .continuity import match_solutions
 from .rotary_disk import passage_from_links, rotary_disk_search
 
-__all__ = ["Patch", "Gate", "Segmentation", "segment", "linked_solutions"]
+__all__ = ["Patch", "Gate", "Segmentation", "segment", "linked_solutions", "TABLE_TYPES"]
 
 METHODS = ("components", "rds")
+
+# The little-endian dtypes of :meth:`Segmentation.tables`, by name.
+TABLE_TYPES = {"patch_ids": "<i8", "patch_region": "<i8", "patch_layer": "<i8",
+               "patch_aspect": "<i8", "patch_solutions": "<i8", "patch_starts": "<i8",
+               "patch_cells": "<i8", "patch_slots": "<i8", "patch_gate": "|b1",
+               "patch_singular": "|b1", "gate_patches": "<i8", "gate_width": "<f8",
+               "gate_starts": "<i8", "gate_faces": "<i8"}
 
 
 @dataclass(frozen=True, eq=False)
@@ -134,9 +142,9 @@ class Segmentation:
         Patch id of each solution of each cell, 0 for none.
     patches : dict of int to Patch
     gates : dict of (int, int) to Gate
-    links : list of (ndarray, ndarray, ndarray)
-        Per grid axis, the face-adjacent cells ``(lower, upper)`` and the
-        continuation links of their solutions
+    matches : list of ndarray of int8, shape (n_faces_of_axis, max_solutions)
+        Per grid axis, the continuation links of the faces in the order of
+        the grid's ``pairs()``
         (:func:`~rpr3_gwr_core.workspace.continuity.match_solutions`).
     """
 
@@ -145,12 +153,28 @@ class Segmentation:
     patch: np.ndarray
     patches: dict
     gates: dict
-    links: list
+    matches: list
 
     @property
     def n_regions(self):
         """Number of regions R."""
         return int(self.region.max(initial=0))
+
+    @functools.cached_property
+    def links(self):
+        """Per grid axis, the face-adjacent cells ``(lower, upper)`` and
+        :attr:`matches`: list of (ndarray, ndarray, ndarray).
+
+        Raises
+        ------
+        InvalidInputError
+            If the matches do not fit the grid's faces.
+        """
+        # Paired on first use: a loaded roadmap plans without them, and the
+        # pairs of a large adaptive grid take a third of a second.
+        pairs = self.field.grid.pairs()
+        _check_matches(self.field, pairs, self.matches)
+        return [(lo, up, m) for (lo, up), m in zip(pairs, self.matches)]
 
     @classmethod
     def from_arrays(cls, field, region, patch, links):
@@ -175,27 +199,218 @@ class Segmentation:
             If the arrays do not fit the field's grid, a link names no slot
             or a patch id is negative or past the regions'.
         """
-        n, slots = field.grid.size, field.max_solutions
         pairs = field.grid.pairs()
-        region = np.asarray(region)
-        patch = np.asarray(patch)
-        if (region.shape != (n,) or patch.shape != (n, slots) or len(links) != len(pairs)
-                or any(np.shape(m) != (lo.size, slots) for m, (lo, _) in zip(links, pairs))):
-            raise InvalidInputError("region, patch and link arrays do not fit the field's grid")
-        links = [(lo, up, np.asarray(m, dtype=np.int8)) for (lo, up), m in zip(pairs, links)]
-        region, patch = region.astype(np.int32), patch.astype(np.int32)
-        # The compiled passes index by slot and by id unchecked: links must
-        # name slots, and ids be what the module doc makes them, below the
-        # next region's first id.
-        if any(m.size and (m.min() < -1 or m.max() >= slots) for _, _, m in links):
-            raise InvalidInputError("links must be -1 or a solution slot")
-        if patch.size and (patch.min() < 0 or patch.max() >= _id_base(field) * (
-                int(region.max(initial=0)) + 1)):
-            raise InvalidInputError("patch ids must be region * 10**k + layer of the regions")
+        _check_matches(field, pairs, links)
+        region, patch, matches = _checked_arrays(field, region, patch, links, copy=True)
+        links = [(lo, up, m) for (lo, up), m in zip(pairs, matches)]
         tally = _tally_faces(field, patch, links)
-        return cls(field=field, region=region, patch=patch,
-                   patches=_describe_patches(field, region, patch, *tally[:3]),
-                   gates=_gates(field, tally[3]), links=links)
+        segmentation = cls(field=field, region=region, patch=patch,
+                           patches=_describe_patches(field, region, patch, *tally[:3]),
+                           gates=_gates(field, tally[3]), matches=matches)
+        # The pairs are at hand: the cached property need not take them again.
+        segmentation.__dict__["links"] = links
+        return segmentation
+
+    def tables(self):
+        """Its patches and gates as flat arrays, by name (dtypes in
+        :data:`TABLE_TYPES`), from which :meth:`from_tables` rebuilds them
+        without deriving anything: per patch (ascending ids) its id, region,
+        layer, aspect and number of solutions, and ``patch_starts`` into the
+        concatenated ``patch_cells``, ``patch_slots`` and flags
+        ``patch_gate`` and ``patch_singular`` (the cell is one of its gate or
+        singular cells); per gate (ascending pairs) its patches, width, and
+        ``gate_starts`` into the concatenated ``gate_faces``.
+
+        Returns
+        -------
+        dict of str to ndarray
+        """
+        patches = [self.patches[pid] for pid in sorted(self.patches)]
+        gates = [self.gates[key] for key in sorted(self.gates)]
+        return {
+            "patch_ids": np.array([p.id for p in patches], dtype=np.int64),
+            "patch_region": np.array([p.region for p in patches], dtype=np.int64),
+            "patch_layer": np.array([p.layer for p in patches], dtype=np.int64),
+            "patch_aspect": np.array([p.aspect for p in patches], dtype=np.int64),
+            "patch_solutions": np.array([p.n_solutions for p in patches], dtype=np.int64),
+            "patch_starts": _starts([p.cells.size for p in patches]),
+            "patch_cells": _joined([p.cells for p in patches], np.int64),
+            "patch_slots": _joined([p.slots for p in patches], np.int64),
+            "patch_gate": _joined([np.isin(p.cells, p.gate_cells) for p in patches], np.bool_),
+            "patch_singular": _joined([np.isin(p.cells, p.singular_cells) for p in patches],
+                                      np.bool_),
+            "gate_patches": np.array([g.patches for g in gates], dtype=np.int64).reshape(-1, 2),
+            "gate_width": np.array([g.width for g in gates], dtype=np.float64),
+            "gate_starts": _starts([len(g.faces) for g in gates]),
+            "gate_faces": _joined([np.reshape(g.faces, (-1, 2)) for g in gates], np.int64,
+                                  (0, 2)),
+        }
+
+    @classmethod
+    def from_tables(cls, field, region, patch, matches, tables):
+        """The segmentation :meth:`tables` describes, its patches' and
+        gates' arrays views of ``tables``.
+
+        What a stored roadmap loads instead of :meth:`from_arrays`: the
+        tables are checked against the arrays (each patch solution is one
+        the ``patch`` array gives that patch, every one is listed, faces
+        join cells of their gate's patches), not derived again.
+
+        Parameters
+        ----------
+        field : NSolutionField
+        region, patch, matches
+            As :meth:`from_arrays` takes them (``matches`` its ``links``);
+            ``region`` and ``patch`` are kept, not copied, when they are
+            int32 already (a stored roadmap's mapped arrays).
+        tables : dict of str to ndarray
+            :meth:`tables`.
+
+        Raises
+        ------
+        InvalidInputError
+            If the arrays do not fit the grid or the tables do not describe
+            the arrays' patches.
+        """
+        region, patch, matches = _checked_arrays(field, region, patch, matches, copy=False)
+        t = _checked_tables(field, region, patch, tables)
+        starts, cells, slots = t["patch_starts"], t["patch_cells"], t["patch_slots"]
+        patches = {}
+        for k, pid in enumerate(t["patch_ids"].tolist()):
+            part = slice(starts[k], starts[k + 1])
+            own = cells[part]
+            patches[pid] = Patch(
+                id=pid, region=int(t["patch_region"][k]), layer=int(t["patch_layer"][k]),
+                aspect=int(t["patch_aspect"][k]), n_solutions=int(t["patch_solutions"][k]),
+                cells=own, slots=slots[part], gate_cells=own[t["patch_gate"][part]],
+                singular_cells=own[t["patch_singular"][part]])
+        bounds, faces = t["gate_starts"], t["gate_faces"]
+        gates = {}
+        for k, (a, b) in enumerate(t["gate_patches"].tolist()):
+            gates[(a, b)] = Gate(patches=(a, b), faces=faces[bounds[k]:bounds[k + 1]],
+                                 width=float(t["gate_width"][k]))
+        return cls(field=field, region=region, patch=patch, patches=patches, gates=gates,
+                   matches=matches)
+
+
+def _starts(sizes):
+    starts = np.zeros(len(sizes) + 1, dtype=np.int64)
+    starts[1:] = np.cumsum(sizes)
+    return starts
+
+
+def _joined(parts, dtype, empty_shape=(0,)):
+    return np.concatenate(parts).astype(dtype, copy=False) if parts else np.zeros(empty_shape,
+                                                                                 dtype)
+
+
+def _check_matches(field, pairs, matches):
+    """That ``matches`` hold one array per axis of ``pairs``, a row per face."""
+    slots = field.max_solutions
+    if len(matches) != len(pairs) or any(np.shape(m) != (lo.size, slots)
+                                         for m, (lo, _) in zip(matches, pairs)):
+        raise InvalidInputError("region, patch and link arrays do not fit the field's grid")
+
+
+def _checked_arrays(field, region, patch, matches, copy):
+    """``region`` and ``patch`` as int32 (copies, or with ``copy=False`` the
+    arrays themselves when int32 already) and ``matches`` as int8 arrays,
+    checked as :meth:`Segmentation.from_arrays` documents (the matches'
+    shapes aside)."""
+    n, slots = field.grid.size, field.max_solutions
+    region = np.asarray(region)
+    patch = np.asarray(patch)
+    if region.shape != (n,) or patch.shape != (n, slots) or any(
+            np.ndim(m) != 2 or np.shape(m)[1] != slots for m in matches):
+        raise InvalidInputError("region, patch and link arrays do not fit the field's grid")
+    matches = [np.asarray(m, dtype=np.int8) for m in matches]
+    region, patch = region.astype(np.int32, copy=copy), patch.astype(np.int32, copy=copy)
+    # The compiled passes index by slot and by id unchecked: links must
+    # name slots, and ids be what the module doc makes them, below the
+    # next region's first id.
+    if any(m.size and (m.min() < -1 or m.max() >= slots) for m in matches):
+        raise InvalidInputError("links must be -1 or a solution slot")
+    if patch.size and (patch.min() < 0 or patch.max() >= _id_base(field) * (
+            int(region.max(initial=0)) + 1)):
+        raise InvalidInputError("patch ids must be region * 10**k + layer of the regions")
+    return region, patch, matches
+
+
+def _checked_tables(field, region, patch, tables):
+    """The tables of :meth:`Segmentation.from_tables`, checked against the
+    arrays; raises InvalidInputError naming what fails."""
+    try:
+        t = {name: np.asarray(tables[name]) for name in TABLE_TYPES}
+    except KeyError as exc:
+        raise InvalidInputError(f"the segmentation tables lack {exc}") from None
+    n, slots = patch.shape
+    n_patches, n_gates, n_entries = (t["patch_ids"].size, t["gate_width"].size,
+                                     t["patch_cells"].size)
+    shapes = dict.fromkeys(("patch_ids", "patch_region", "patch_layer", "patch_aspect",
+                            "patch_solutions"), (n_patches,))
+    shapes.update(dict.fromkeys(("patch_cells", "patch_slots", "patch_gate",
+                                 "patch_singular"), (n_entries,)))
+    shapes.update(patch_starts=(n_patches + 1,), gate_patches=(n_gates, 2),
+                  gate_width=(n_gates,), gate_starts=(n_gates + 1,),
+                  gate_faces=(t["gate_faces"].size // 2, 2))
+    if any(t[name].shape != shape or t[name].dtype != np.dtype(TABLE_TYPES[name])
+           for name, shape in shapes.items()):
+        raise InvalidInputError("the segmentation tables' shapes or dtypes do not fit")
+    ids, starts, cells, cell_slots = (t["patch_ids"], t["patch_starts"], t["patch_cells"],
+                                      t["patch_slots"])
+    if np.any(np.diff(ids) <= 0) or starts[0] != 0 or starts[-1] != n_entries \
+            or np.any(np.diff(starts) <= 0) or n_entries != np.count_nonzero(patch):
+        raise InvalidInputError("the patch table does not list each patch solution once")
+    if n_entries and (cells.min() < 0 or cells.max() >= n or cell_slots.min() < 0
+                      or cell_slots.max() >= slots):
+        raise InvalidInputError("the patch table names cells or slots outside the grid")
+    owner = np.repeat(np.arange(n_patches), np.diff(starts))
+    if not np.array_equal(patch[cells, cell_slots], ids[owner]):
+        raise InvalidInputError("the patch table differs from the patch array")
+    ascending = np.diff(cells) > 0
+    ascending[starts[1:-1] - 1] = True
+    if not ascending.all():
+        raise InvalidInputError("the patch table's cells do not ascend within each patch")
+    # The module doc's rules: the id from region and layer, the region the
+    # largest of its cells', the solutions' number that of the region's first
+    # cell, the aspect that of its first solution.
+    own = region[cells]
+    in_own = np.flatnonzero(own == t["patch_region"][owner])
+    first = np.searchsorted(in_own, starts[:-1])
+    if n_patches and (
+            np.any(first >= in_own.size)
+            or np.any(owner[in_own[np.minimum(first, in_own.size - 1)]] != np.arange(n_patches))):
+        raise InvalidInputError("the patch table's regions differ from the arrays'")
+    first = in_own[first]
+    if n_patches and (
+            np.any(ids != _id_base(field) * t["patch_region"] + t["patch_layer"])
+            or np.any(t["patch_layer"] < 1) or np.any(t["patch_layer"] >= _id_base(field))
+            or not np.array_equal(np.maximum.reduceat(own, starts[:-1]), t["patch_region"])
+            or not np.array_equal(field.count[cells[first]], t["patch_solutions"])
+            or not np.array_equal(np.sign(field.margin[cells[starts[:-1]],
+                                                       cell_slots[starts[:-1]]]),
+                                  t["patch_aspect"])):
+        raise InvalidInputError("the patch table's regions, layers, solutions or aspects "
+                                "differ from the arrays'")
+    pairs, bounds, faces = t["gate_patches"], t["gate_starts"], t["gate_faces"]
+    if bounds[0] != 0 or bounds[-1] != len(faces) or np.any(np.diff(bounds) <= 0) \
+            or np.any(pairs[:, 0] >= pairs[:, 1]) or not np.all(np.isin(pairs, ids)) \
+            or not np.all(t["gate_width"] > 0) or not np.all(np.isfinite(t["gate_width"])):
+        raise InvalidInputError("the gate table does not list gates between patches")
+    if faces.size and (faces.min() < 0 or faces.max() >= n):
+        raise InvalidInputError("the gate table names cells outside the grid")
+    # A patch's gate cells are its cells on its gates' faces; as its entries
+    # are checked above, so is that each face joins cells of its gate's
+    # patches.  The entries ascend by patch and cell: the flagged keys come
+    # sorted and distinct.
+    sides = np.repeat(pairs, np.diff(bounds), axis=0)
+    on_faces = np.sort(np.searchsorted(ids, sides.ravel()) * n + faces.ravel())
+    on_faces = on_faces[np.diff(on_faces, prepend=-1) != 0]
+    flagged = owner[t["patch_gate"]] * n + cells[t["patch_gate"]]
+    if not np.array_equal(on_faces, flagged):
+        raise InvalidInputError("the gate table's faces and the patch table's gate cells "
+                                "differ")
+    return t
 
 
 def segment(field, method="components", min_region_cells=8):
