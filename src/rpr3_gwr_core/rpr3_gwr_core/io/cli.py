@@ -146,6 +146,9 @@ def _parser():
     roadmap.add_argument("--slice-rho1", type=_leg, default=17.0,
                          help="with --full: rho1 of the slice figure")
     roadmap.add_argument("--cache-dir", default=default_cache_dir())
+    roadmap.add_argument("--scene", metavar="FILE.yaml",
+                         help="a scene of obstacles and limits: the summary counts the parts "
+                              "it leaves, the field figure hatches what it blocks")
     plan = sub.add_parser("plan", help="plan a singularity-free path between two configurations")
     plan.add_argument("--rho1", type=_leg, help="default 17")
     _mechanism_options(plan)
@@ -172,6 +175,9 @@ def _parser():
     plan.add_argument("--time-limit", type=_duration, metavar="SECONDS",
                       help="stop planning after this long (the roadmap loaded): the valid path "
                            "found by then, or a TIMEOUT error")
+    plan.add_argument("--scene", metavar="FILE.yaml",
+                      help="plan among its obstacles and within its limits (exit 1 with "
+                           "IN_COLLISION or reason blocked when they forbid it)")
     plan.add_argument("-o", "--output", help="also write the JSON here")
     plan.add_argument("--cache-dir", help="roadmap cache (default: %(default)s)",
                       default=default_cache_dir())

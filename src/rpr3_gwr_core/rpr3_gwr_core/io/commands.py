@@ -23,6 +23,8 @@ __all__ = ["run"]
 
 # Grid step of the slices of ``cusps --trace`` [length unit].
 _TRACE_STEP = 0.25
+# Largest box of all the joints built as a uniform grid [cells].
+_UNIFORM_CELLS = 1_000_000
 
 
 def run(args):
@@ -71,7 +73,8 @@ def _cusps(args):
     if args.mechanism is None:
         mechanism, grid = PAPER_GEOMETRY, rho1_slice(args.rho1)
     else:
-        mechanism, grid = _file_roadmap(args)
+        described, grid = _file_roadmap(args)
+        mechanism = described.mechanism
         # Refused before the roadmap is built: without its own equations the
         # mechanism would fail at the first seed.
         if type(mechanism).refine_cusp is Mechanism.refine_cusp:
@@ -125,8 +128,9 @@ def _roadmap(args):
     if args.mechanism is not None:
         from .cache import cached_roadmap
 
-        mechanism, grid = _file_roadmap(args)
-        roadmap, hit = cached_roadmap(mechanism, grid, args.cache_dir, _Progress(sys.stderr))
+        described, grid = _file_roadmap(args)
+        roadmap, hit = cached_roadmap(described.mechanism, *_refined(grid), args.cache_dir,
+                                      _Progress(sys.stderr))
         if args.slice_figure:
             raise InvalidInputError("--slice-figure needs --full")
     elif args.full:
@@ -142,6 +146,15 @@ def _roadmap(args):
         roadmap, hit = build_roadmap(PAPER_GEOMETRY, grid, method=args.method,
                                      progress=_Progress(sys.stderr)), False
     summary = roadmap_summary(roadmap)
+    world = None
+    if args.scene is not None:
+        from ..planning import Planner
+
+        world = _applied(Planner(roadmap), _load_scene(args.scene), args)
+        solutions = roadmap.segmentation.patch > 0
+        summary["scene"] = {"file": args.scene, "parts": world.n_parts,
+                            "blocked_solutions": int((solutions & ~world.free).sum()),
+                            "solutions": int(solutions.sum())}
     summary["timings"] = dict(roadmap.timings, total=time.perf_counter() - start)
     summary["from_cache"] = hit
     if args.slice_figure:
@@ -158,7 +171,7 @@ def _roadmap(args):
         from .figures import field_figure, roadmap_figure
 
         if args.field_figure:
-            _save(args.field_figure, field_figure(roadmap))
+            _save(args.field_figure, field_figure(roadmap, world))
         if args.roadmap_figure:
             _save(args.roadmap_figure, roadmap_figure(roadmap))
     return summary
@@ -197,13 +210,54 @@ def _paper_slice_options(args, names):
 
 
 def _file_roadmap(args):
-    """The mechanism of ``--mechanism`` and the grid of its box and ``--fix``."""
+    """The :class:`~.mechanism_file.MechanismFile` of ``--mechanism`` and the
+    grid of its box and ``--fix``."""
     from .mechanism_file import load_mechanism_file
 
     described = load_mechanism_file(args.mechanism)
     grid = described.grid(dict(args.fix))
     check_roadmap_grid(described.mechanism, grid)
-    return described.mechanism, grid
+    return described, grid
+
+
+def _refined(grid):
+    """``(grid, refinement)`` for :func:`~.cache.cached_roadmap`: a box of
+    all the joints with more than :data:`_UNIFORM_CELLS` cells is refined
+    adaptively from a coarse base (only near the singular locus: the
+    3-RRR's 120-cell torus has 1.7 million cells, adaptively 0.9 million),
+    any other grid taken whole."""
+    from ..workspace.adaptive import DEFAULT_REFINEMENT, coarse_base
+
+    if grid.fixed or grid.size <= _UNIFORM_CELLS:
+        return grid, None
+    return coarse_base(grid, DEFAULT_REFINEMENT), DEFAULT_REFINEMENT
+
+
+def _bodies(args):
+    """The body model of ``--mechanism``'s file, None for the defaults."""
+    if args.mechanism is None:
+        return None
+    from .mechanism_file import load_mechanism_file
+
+    return load_mechanism_file(args.mechanism).bodies
+
+
+def _load_scene(path):
+    """The scene of a file, its errors naming the file."""
+    from ..world import load_scene
+
+    try:
+        return load_scene(path)
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"{path}: {exc}") from None
+
+
+def _applied(planner, scene, args):
+    """The planner's roadmap restricted to ``--scene``, its errors naming the file."""
+    try:
+        return planner.apply_scene(scene, _bodies(args))
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"{args.scene}: {exc}") from None
 
 
 def _plan(args):
@@ -245,7 +299,8 @@ def _plan_on_file(args):
     from ..planning import PlanOptions
     from .cache import cached_planning
 
-    mechanism, grid = _file_roadmap(args)
+    described, grid = _file_roadmap(args)
+    mechanism = described.mechanism
     start, goal = tuple(args.start), tuple(args.goal)
     for name, values in (("start", start), ("goal", goal)):
         if len(values) != mechanism.n_joints + 1:
@@ -258,7 +313,8 @@ def _plan_on_file(args):
                           feasibility_only=args.feasibility_only,
                           max_velocity=args.max_velocity, max_acceleration=args.max_acceleration,
                           **tolerance)
-    roadmap, index, _ = cached_planning(mechanism, grid, args.cache_dir, _Progress(sys.stderr))
+    roadmap, index, _ = cached_planning(mechanism, *_refined(grid), args.cache_dir,
+                                        _Progress(sys.stderr))
     roadmap_doc = {"mechanism": mechanism.to_dict(), "grid": grid.to_dict()}
     return _answer(args, roadmap, index, start, goal, options, roadmap_doc)
 
@@ -268,11 +324,17 @@ def _answer(args, roadmap, index, start, goal, options, roadmap_doc):
     from ..planning import NEVER, Planner, Termination
 
     header = {"roadmap": roadmap_doc, "request": {"start": list(start), "goal": list(goal)}}
+    scene = None if args.scene is None else _load_scene(args.scene)
+    if scene is not None:
+        header["scene"] = scene.to_dict()
     begin = time.perf_counter()
+    planner = Planner(roadmap, index)
+    # A scene that does not fit the mechanism is bad input, not "no plan".
+    world = None if scene is None else _applied(planner, scene, args)
     try:
-        planner = Planner(roadmap, index)
         termination = NEVER if args.time_limit is None else Termination.after(args.time_limit)
-        result = dict(header, **planner.plan(start, goal, options, termination).to_dict())
+        plan = planner.plan(start, goal, options, termination, world)
+        result = dict(header, **plan.to_dict())
         code = 0
     except GWRError as exc:
         result = dict(header, feasible=False, reason=getattr(exc, "reason", exc.code.lower()),

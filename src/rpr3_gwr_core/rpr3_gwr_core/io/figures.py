@@ -16,17 +16,21 @@ from ..workspace.cusps import known_cusps
 __all__ = ["field_figure", "slice_figure", "roadmap_figure", "plan_figure"]
 
 
-def field_figure(roadmap):
+def field_figure(roadmap, world=None):
     """The n-solution field with its region ids, as the paper's figure 6.
 
     Cells are coloured by their number of solutions; region ids are written
     at each region's most interior cell; cells of no region are white, the
     boundaries between regions are drawn dark and the cusps of the singular
-    curve are marked.
+    curve are marked.  With a scene, the cells where it blocks solutions
+    are hatched over the field (as the paper's figure 3 darkens singular
+    and obstacle cells alike): densely where it blocks every solution.
 
     Parameters
     ----------
     roadmap : Roadmap
+    world : SceneRoadmap, optional
+        The roadmap restricted to a scene.
 
     Returns
     -------
@@ -46,10 +50,24 @@ def field_figure(roadmap):
     cusps = np.array([c.joints[list(grid.axis_joints)] for c in known_cusps(roadmap)])
     if cusps.size:
         ax.plot(cusps[:, 0], cusps[:, 1], "r^", ms=8, label="cusp")
+    title = f"n-solution field and regions{fixed}"
+    if world is not None:
+        solutions = seg.patch > 0
+        blocked = (solutions & ~world.free).sum(axis=1)
+        some = (blocked > 0).reshape(shape)
+        every = (blocked == solutions.sum(axis=1)).reshape(shape) & some
+        for mask, hatch, name in ((some & ~every, "//", "scene blocks some solutions"),
+                                  (every, "xxxx", "scene blocks every solution")):
+            if mask.any():
+                ax.contourf(u, v, mask.T.astype(float), levels=[0.5, 1.5], colors="none",
+                            hatches=[hatch])
+                ax.plot([], [], "s", mfc="none", mec="k", label=name)
+        title += f"\n{world.n_parts} free parts in the scene"
+    if cusps.size or world is not None:
         ax.legend(loc="upper left")
     ax.set_xlabel(labels[0])
     ax.set_ylabel(labels[1])
-    ax.set_title(f"n-solution field and regions{fixed}")
+    ax.set_title(title)
     return fig
 
 

@@ -272,7 +272,6 @@ class Planner:
         self.clearance_weight = float(clearance_weight)
         self.min_margin = float(min_margin)
         self.max_step = float(max_step)
-        self._joints = roadmap.grid.joints()
         self._free = list(roadmap.grid.axis_joints)
         seg, mechanism = roadmap.segmentation, roadmap.mechanism
         self._world_indices = {}
@@ -299,7 +298,7 @@ class Planner:
                                                max_acceleration=1.0))
         except GWRError:
             pass  # the kernels it reached are loaded all the same
-        joints = self._joints[cells]
+        joints = self.roadmap.grid.joints_at(cells)
         self._clear(joints[:1], joints[1:], [patch.id], [0.0])
 
     def locate(self, configuration, mode_tol=DEFAULT_MODE_TOL):
@@ -581,7 +580,7 @@ class Planner:
         sheet = seg.field.poses[cells, np.argmax(member, axis=1)]
         mechanism = self.roadmap.mechanism
         grid = self.roadmap.grid
-        verifiable = np.all(np.abs(joints - grid.nearest_joints(joints, self._joints[cells]))
+        verifiable = np.all(np.abs(joints - grid.nearest_joints(joints, grid.joints_at(cells)))
                             < 1e-9, axis=1) & member.any(axis=1)
         off = verifiable & (mechanism.pose_distance(result.poses, sheet)
                             > _STRAYED * mechanism.scale)
@@ -653,7 +652,7 @@ class Planner:
 
         Returns the legs, the patch of each waypoint and its cell (-1 for
         the exact start and goal)."""
-        joints = np.vstack([s.joints, self._joints[local.cells], g.joints])
+        joints = np.vstack([s.joints, self.roadmap.grid.joints_at(local.cells), g.joints])
         if self.roadmap.grid.periodic:
             joints = self.roadmap.grid.unwrap(joints)
         patches = np.concatenate([[s.patch], local.patches, [g.patch]])

@@ -205,14 +205,17 @@ def _seeds(field):
                    + np.take_along_axis(aspect, k, axis=1)) == 1
     row, slot = np.nonzero(mixed & np.isfinite(spread))
     order = np.argsort(spread[row, slot], kind="stable")
-    coordinates = grid.coordinates()
-    taken = []
+    coordinates = grid.coordinates_of(cells)
+    taken = np.empty((_MAX_SEEDS, grid.ndim))
+    n_taken = 0
     for r, k in zip(row[order], slot[order]):
-        here = coordinates[cells[r]]
-        if all(np.max(np.abs(here - coordinates[c])) > _SEED_SPACING * grid.step for c in taken):
-            taken.append(cells[r])
+        here = coordinates[r]
+        if n_taken == 0 or np.min(np.max(np.abs(here - taken[:n_taken]), axis=1)) \
+                > _SEED_SPACING * grid.step:
+            taken[n_taken] = here
+            n_taken += 1
             yield poses[r, k]
-            if len(taken) == _MAX_SEEDS:
+            if n_taken == _MAX_SEEDS:
                 return
 
 

@@ -21,7 +21,6 @@ import numbers
 
 import numba
 import numpy as np
-from scipy.ndimage import distance_transform_edt
 
 from ..exceptions import InvalidInputError, OutOfGridError
 from .continuity import neighbour_pairs
@@ -215,8 +214,15 @@ class GridBase:
 
     def joints(self):
         """Joint vector of every cell, shape (size, n_joints)."""
-        out = np.empty((self.size, self.n_joints))
-        out[:, list(self.axis_joints)] = self.coordinates()
+        return self._with_fixed(self.coordinates())
+
+    def joints_at(self, cells):
+        """Joint vectors of some cells, shape (len(cells), n_joints)."""
+        return self._with_fixed(self.coordinates_of(cells))
+
+    def _with_fixed(self, coordinates):
+        out = np.empty((len(coordinates), self.n_joints))
+        out[:, list(self.axis_joints)] = coordinates
         for joint, value in self.fixed:
             out[:, joint] = value
         return out
@@ -407,6 +413,10 @@ class Grid(GridBase):
         tiles = [(n, n) if a.periodic else (0, 0) for n, a in zip(self.shape, self.axes)]
         padded = np.pad(np.pad(mask, tiles, mode="wrap"), 1)
         middle = tuple(slice(1 + t, 1 + t + n) for (t, _), n in zip(tiles, self.shape))
+        # Imported here: scipy.ndimage takes a tenth of a second to import,
+        # and only building a planning index needs it.
+        from scipy.ndimage import distance_transform_edt
+
         return distance_transform_edt(padded)[middle].ravel()[cells]
 
     def cells_in_box(self, point, radius):
