@@ -129,8 +129,9 @@ def _roadmap(args):
         from .cache import cached_roadmap
 
         described, grid = _file_roadmap(args)
-        roadmap, hit = cached_roadmap(described.mechanism, *_refined(grid), args.cache_dir,
-                                      _Progress(sys.stderr))
+        base, refinement = _refined(grid)
+        roadmap, hit = cached_roadmap(described.mechanism, base, args.cache_dir,
+                                      _Progress(sys.stderr), refinement=refinement)
         if args.slice_figure:
             raise InvalidInputError("--slice-figure needs --full")
     elif args.full:
@@ -313,8 +314,9 @@ def _plan_on_file(args):
                           feasibility_only=args.feasibility_only,
                           max_velocity=args.max_velocity, max_acceleration=args.max_acceleration,
                           **tolerance)
-    roadmap, index, _ = cached_planning(mechanism, *_refined(grid), args.cache_dir,
-                                        _Progress(sys.stderr))
+    base, refinement = _refined(grid)
+    roadmap, index, _ = cached_planning(mechanism, base, args.cache_dir, _Progress(sys.stderr),
+                                        refinement=refinement)
     roadmap_doc = {"mechanism": mechanism.to_dict(), "grid": grid.to_dict()}
     return _answer(args, roadmap, index, start, goal, options, roadmap_doc)
 
