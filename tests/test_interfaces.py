@@ -17,8 +17,9 @@ def test_the_package_ships_the_designed_interfaces():
         ("action", "ExecuteTrajectory"),
         ("msg", "AxisLinks"), ("msg", "Configuration"), ("msg", "Cusp"), ("msg", "FixedJoint"),
         ("msg", "Gate"), ("msg", "GlobalPath"), ("msg", "Grid"), ("msg", "GridAxis"),
-        ("msg", "Mechanism"), ("msg", "MechanismParameter"), ("msg", "NSolutionField"),
-        ("msg", "PlatformPose"), ("msg", "WorkspacePatch"),
+        ("msg", "JointRange"), ("msg", "Mechanism"), ("msg", "MechanismParameter"),
+        ("msg", "NSolutionField"), ("msg", "Obstacle"), ("msg", "PlatformPose"),
+        ("msg", "Scene"), ("msg", "WorkspacePatch"),
         ("msg", "WorkspaceRoadmap"),
         ("srv", "PlanPath"), ("srv", "ResetDriver"),
     ]

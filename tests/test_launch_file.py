@@ -43,9 +43,9 @@ def _console_scripts():
             for name, target in (line.split("=") for line in scripts)}
 
 
-def test_the_launch_file_starts_the_four_nodes():
+def test_the_launch_file_starts_the_five_nodes():
     assert sorted(e for e, _ in _started_nodes()) == [
-        "planner", "roadmap_builder", "rpr3_driver", "trajectory_recorder"]
+        "planner", "roadmap_builder", "rpr3_driver", "scene_publisher", "trajectory_recorder"]
 
 
 @pytest.mark.parametrize("executable, parameters", _started_nodes())

@@ -26,6 +26,7 @@ setup(
             "planner = rpr3_gwr_nodes.planner:main",
             "rpr3_driver = rpr3_gwr_nodes.rpr3_driver:main",
             "trajectory_recorder = rpr3_gwr_nodes.trajectory_recorder:main",
+            "scene_publisher = rpr3_gwr_nodes.scene_publisher:main",
             "rpr3_gwr_recover_bag = rpr3_gwr_nodes.bag_recovery:main",
         ],
     },

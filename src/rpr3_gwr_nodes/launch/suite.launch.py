@@ -3,13 +3,17 @@
     ros2 launch rpr3_gwr_nodes suite.launch.py record:=true
     ros2 launch rpr3_gwr_nodes suite.launch.py full:=true
     ros2 launch rpr3_gwr_nodes suite.launch.py mechanism_file:=config/three_rrr.yaml
+    ros2 launch rpr3_gwr_nodes suite.launch.py scene:=true \
+        scene_file:=config/scenes/paper_narrowed.yaml
 
 Starts the roadmap builder, the planner and the simulated driver, all three
 on one mechanism (``mechanism_file``, the paper's 3-RPR by default; the
 builder's slice fixes its first joint, at the builder's default value: set
 another with ``ros2 param set /roadmap_builder fixed_value ...``), and with
 ``record:=true`` a recorder that writes plans, joint states and every marker
-to one MCAP bag (open it in Foxglove or Lichtblick).  Keep DDS on this
+to one MCAP bag (open it in Foxglove or Lichtblick), and with ``scene:=true``
+a scene publisher of ``scene_file``: the planner plans in it, the driver
+stops before its obstacles.  Keep DDS on this
 machine as the README says (the project's Fast DDS profile).
 """
 
@@ -28,6 +32,9 @@ ARGUMENTS = [
     ("time_scale", "1.0", "Playback speed factor of the simulated driver"),
     ("record", "false", "Also start the bag recorder"),
     ("bag_path", "rpr3_gwr_bags/suite", "Directory of the bag to write (must not exist)"),
+    ("scene", "false", "Also start the scene publisher"),
+    ("scene_file", "", "Scene the scene publisher publishes (YAML, as config/scenes/*.yaml); "
+                       "empty for no scene"),
 ]
 
 
@@ -53,4 +60,7 @@ def generate_launch_description():
              condition=IfCondition(config["record"]),
              parameters=[{"bag_path": config["bag_path"], "storage": "mcap",
                           "record_joint_states": True, "record_visualization": True}]),
+        Node(package="rpr3_gwr_nodes", executable="scene_publisher", name="scene_publisher",
+             output="screen", condition=IfCondition(config["scene"]),
+             parameters=[{"scene_file": ParameterValue(config["scene_file"], value_type=str)}]),
     ])

@@ -7,29 +7,38 @@ only the solutions that exist (a third of the slots of the full 3-DOF
 roadmap, whose field message is then about 150 MB instead of 390).  A roadmap
 travels as its field's arrays; patches and gates are derived from them on
 arrival by the core's one decoder (``Segmentation.from_arrays``), and the
-roadmap message's summary must agree.
+roadmap message's summary must agree.  A scene travels as obstacles and
+named joint ranges and is read by the core's one scene reader
+(``scene_from_dict``), which refuses what it cannot use.
 """
 
 import array
 
 import numpy as np
 from builtin_interfaces.msg import Duration
+from geometry_msgs.msg import Point, Point32, Polygon
 from rpr3_gwr_core.exceptions import InvalidInputError
 from rpr3_gwr_core.mechanisms import mechanism_from_dict
+from rpr3_gwr_core.world import scene_from_dict
 from rpr3_gwr_core.workspace import (AdaptiveGrid, Axis, Grid, NSolutionField, Roadmap,
                                      Segmentation, roadmap_graph)
 from rpr3_gwr_core.workspace.cusps import known_cusps
-from rpr3_gwr_msgs.msg import AxisLinks, FixedJoint, GridAxis, MechanismParameter, PlatformPose
+from rpr3_gwr_msgs.msg import (AxisLinks, FixedJoint, GridAxis, JointRange, MechanismParameter,
+                               Obstacle, PlatformPose)
 from rpr3_gwr_msgs.msg import Cusp as CuspMsg
 from rpr3_gwr_msgs.msg import Gate as GateMsg
 from rpr3_gwr_msgs.msg import Grid as GridMsg
 from rpr3_gwr_msgs.msg import Mechanism as MechanismMsg
 from rpr3_gwr_msgs.msg import NSolutionField as NSolutionFieldMsg
+from rpr3_gwr_msgs.msg import Scene as SceneMsg
 from rpr3_gwr_msgs.msg import WorkspacePatch, WorkspaceRoadmap
+
+from .profiles import BASE_FRAME
 
 __all__ = ["MAX_DURATION", "duration_msg", "mechanism_to_msg", "mechanism_from_msg",
            "pose_msg", "configuration_from_msg", "grid_to_msg", "grid_from_msg",
-           "roadmap_to_msgs", "roadmap_from_msgs"]
+           "roadmap_to_msgs", "roadmap_from_msgs", "scene_to_msg", "scene_from_msg",
+           "is_empty_scene"]
 
 # builtin_interfaces/Duration holds int32 seconds.
 MAX_DURATION = 2**31 - 1
@@ -255,3 +264,72 @@ def roadmap_from_msgs(field_msg, roadmap_msg):
             or {(g.patch_a, g.patch_b) for g in roadmap_msg.gates} != set(segmentation.gates)):
         raise InvalidInputError("the roadmap message's patches and gates do not match its field")
     return Roadmap(segmentation=segmentation, graph=roadmap_graph(segmentation), timings={})
+
+
+def scene_to_msg(scene, header):
+    """A core scene as a rpr3_gwr_msgs/Scene with ``header`` (frame ``base``):
+    its polygons, then its discs, and its limits."""
+    limits = scene.limits
+    obstacles = [Obstacle(id=o.id, type=Obstacle.POLYGON, polygon=Polygon(points=[
+        Point32(x=float(x), y=float(y)) for x, y in o.vertices])) for o in scene.polygons]
+    obstacles += [Obstacle(id=o.id, type=Obstacle.DISC, radius=float(o.radius),
+                           center=Point(x=float(o.center[0]), y=float(o.center[1])))
+                  for o in scene.discs]
+    return SceneMsg(header=header, obstacles=obstacles,
+                    strokes=_joint_ranges(limits.strokes),
+                    passive_ranges=_joint_ranges(limits.passive),
+                    obstacle_clearance=float(limits.obstacle_clearance))
+
+
+def _joint_ranges(ranges):
+    return [JointRange(name=name, min=float(low), max=float(high))
+            for name, (low, high) in ranges.items()]
+
+
+def scene_from_msg(msg):
+    """A rpr3_gwr_msgs/Scene as a core scene (``scene_from_dict`` checks it);
+    joint names are checked against a mechanism where the scene is applied.
+
+    Raises
+    ------
+    InvalidInputError
+        If the frame is not ``base``, an obstacle has no id or no known
+        type, a joint is named twice, or the core refuses the scene (a
+        number not finite, a radius not positive, a polygon without area or
+        with crossing edges, a duplicate id, a range with min above max...).
+    """
+    if msg.header.frame_id not in ("", BASE_FRAME):
+        raise InvalidInputError(f"scene message: frame {msg.header.frame_id!r}, the scene's "
+                                f"obstacles must be in {BASE_FRAME!r}")
+    obstacles = []
+    for k, obstacle in enumerate(msg.obstacles):
+        if not obstacle.id:
+            raise InvalidInputError(f"scene message: obstacle {k} has no id")
+        if obstacle.type == Obstacle.DISC:
+            shape = {"disc": {"center": [obstacle.center.x, obstacle.center.y],
+                              "radius": obstacle.radius}}
+        elif obstacle.type == Obstacle.POLYGON:
+            shape = {"polygon": [[p.x, p.y] for p in obstacle.polygon.points]}
+        else:
+            raise InvalidInputError(f"scene message: obstacle {obstacle.id!r} has type "
+                                    f"{obstacle.type}, neither DISC ({Obstacle.DISC}) nor "
+                                    f"POLYGON ({Obstacle.POLYGON})")
+        obstacles.append({"id": obstacle.id, **shape})
+    return scene_from_dict({"obstacles": obstacles, "limits": {
+        "strokes": _ranges_from(msg.strokes, "strokes"),
+        "passive": _ranges_from(msg.passive_ranges, "passive_ranges"),
+        "obstacle_clearance": msg.obstacle_clearance}})
+
+
+def _ranges_from(ranges, where):
+    names = [r.name for r in ranges]
+    if len(set(names)) != len(names):
+        raise InvalidInputError(f"scene message: a joint is named twice in {where} {names}")
+    return {r.name: [r.min, r.max] for r in ranges}
+
+
+def is_empty_scene(scene):
+    """Whether a scene has neither obstacles nor joint ranges: no scene (its
+    clearance alone keeps nothing away)."""
+    limits = scene.limits
+    return not (scene.polygons or scene.discs or limits.strokes or limits.passive)

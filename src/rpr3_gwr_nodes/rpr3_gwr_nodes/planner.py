@@ -33,6 +33,25 @@ trajectory is also published on ``planned_trajectory``
 (trajectory_msgs/JointTrajectory) for recording, and drawn on
 ``planned_path_markers`` (visualization_msgs/MarkerArray: the platform's
 track in ``base``, the joint path in ``joint_space``).
+
+Plans keep the mechanism's bodies off the obstacles of the latest scene
+received on ``scene`` (rpr3_gwr_msgs/Scene, reliable, transient local) and
+within its limits.  A new scene is applied to the roadmap
+(``Planner.apply_scene``: a second for the paper's slice the first time,
+then tenths; ten seconds and then a few for the full 3-DOF roadmap) in the
+updates' callback group while requests go on with the previous scene on the
+other executor threads; the new one replaces it atomically with the
+planning state, and a new roadmap takes the current scene before it is
+planned on.  A scene that cannot be read or that does not fit the roadmap
+(a limit naming a joint the mechanism lacks) is refused with an error in
+the log and the previous one stays; one without obstacles and joint ranges
+means no scene.  The scene planned with is echoed on ``~/current_scene``
+(same QoS; its header stamp is the received one, empty when planning
+without a scene).  A start or goal that collides answers
+``ERROR_IN_COLLISION``, ends the roadmap joins and the scene does not
+``ERROR_INFEASIBLE`` with ``FEASIBILITY_BLOCKED``.  In a scene, requests are
+planned in the node's process: the workers know the roadmap and its
+planning index only.
 """
 
 import math
@@ -51,14 +70,14 @@ from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
 from rpr3_gwr_core.io.paths import default_cache_dir
 from rpr3_gwr_core.planning import (DEFAULT_CLEARANCE, PlanningIndex, PlanOptions, Planner,
                                     Retries, Termination, planning_index)
-from rpr3_gwr_msgs.msg import GlobalPath, NSolutionField, WorkspaceRoadmap
+from rpr3_gwr_msgs.msg import GlobalPath, NSolutionField, Scene, WorkspaceRoadmap
 from rpr3_gwr_msgs.srv import PlanPath
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from visualization_msgs.msg import MarkerArray
 
-from .conversions import (MAX_DURATION, configuration_from_msg, duration_msg, pose_msg,
-                          roadmap_from_msgs)
+from .conversions import (MAX_DURATION, configuration_from_msg, duration_msg, is_empty_scene,
+                          pose_msg, roadmap_from_msgs, scene_from_msg, scene_to_msg)
 from .memory import release_free_memory, use_one_arena
 from .plan_workers import PlanWorkers, WorkerFailed, WorkersClosed
 from .profiles import BASE_FRAME, LATCHED_QOS, SERVICE_QOS
@@ -77,12 +96,17 @@ ERROR_CODES = {
     "INFEASIBLE": PlanPath.Response.ERROR_INFEASIBLE,
     "VALIDATION_FAILED": PlanPath.Response.ERROR_VALIDATION_FAILED,
     "TIMEOUT": PlanPath.Response.ERROR_TIMEOUT,
+    "IN_COLLISION": PlanPath.Response.ERROR_IN_COLLISION,
 }
 FEASIBILITY = {
     "same_patch": PlanPath.Response.FEASIBILITY_SAME_PATCH,
     "connected": PlanPath.Response.FEASIBILITY_CONNECTED,
     "other_aspect": PlanPath.Response.FEASIBILITY_OTHER_ASPECT,
     "unreachable": PlanPath.Response.FEASIBILITY_UNREACHABLE,
+    # In a scene: one part of a patch (part of the same patch), and cut apart
+    # by the scene.
+    "same_part": PlanPath.Response.FEASIBILITY_SAME_PATCH,
+    "blocked": PlanPath.Response.FEASIBILITY_BLOCKED,
 }
 
 
@@ -119,14 +143,16 @@ _WORKER_TIMEOUT = 120.0
 
 
 class _State:
-    """A planner, the stamp of the roadmap messages it was built from and the
-    workers planning on it (None: plan in this process), swapped as one
+    """A planner, the stamp of the roadmap messages it was built from, the
+    workers planning on it (None: plan in this process) and its roadmap
+    restricted to the current scene (None: no scene), swapped as one
     reference."""
 
-    def __init__(self, planner, stamp, workers=None):
+    def __init__(self, planner, stamp, workers=None, world=None):
         self.planner = planner
         self.stamp = stamp
         self.workers = workers
+        self.world = world
 
 
 class PlannerNode(Node):
@@ -185,11 +211,22 @@ class PlannerNode(Node):
         self.mechanism = load_mechanism_file(path).mechanism if path else None
         self._state = None
         self._messages = {}
+        # The scene each new roadmap is restricted to, and the header stamp it
+        # came with (None: no scene).
+        self._scene = None
+        self._scene_stamp = None
+        # Scene messages refused (unreadable, or not fitting the roadmap).
+        self.refused_scenes = 0
+        # Roadmaps and scenes are taken one at a time (they replace the
+        # planning state); requests go on on the executor's other threads.
         updates = MutuallyExclusiveCallbackGroup()
         self.create_subscription(NSolutionField, "field", self._on_field, LATCHED_QOS,
                                  callback_group=updates)
         self.create_subscription(WorkspaceRoadmap, "roadmap", self._on_roadmap, LATCHED_QOS,
                                  callback_group=updates)
+        self.create_subscription(Scene, "scene", self._on_scene, LATCHED_QOS,
+                                 callback_group=updates)
+        self.scene_pub = self.create_publisher(Scene, "~/current_scene", LATCHED_QOS)
         self.trajectory_pub = self.create_publisher(JointTrajectory, "planned_trajectory", 10)
         self.marker_pub = self.create_publisher(MarkerArray, "planned_path_markers", 10)
         self.create_service(PlanPath, "plan_path", self._on_plan, qos_profile=SERVICE_QOS,
@@ -241,9 +278,11 @@ class PlannerNode(Node):
                 planner.warm_up()
             except Exception as exc:  # a bug there must not take the node down
                 self.get_logger().error(f"the warm-up failed: {exc!r}")
+        world = self._world_for(planner)
         # One reference assignment: atomic for the service threads, and a
         # request keeps the state it started with.
-        previous, self._state = self._state, _State(planner, roadmap.header.stamp)
+        previous, self._state = self._state, _State(planner, roadmap.header.stamp, world=world)
+        self._echo_scene()
         stamp = roadmap.header.stamp
         self.get_logger().info(
             f"planning on a new roadmap (stamp {stamp.sec}.{stamp.nanosec:09d}): "
@@ -287,6 +326,8 @@ class PlannerNode(Node):
                                         f"{exc!r}")
         if state is None:
             state = _State(Planner(roadmap, index, retries=self._retries), stamp)
+        # The scene's index is the planner's: this planner needs its own.
+        state.world = self._world_for(state.planner)
         # Updates are mutually exclusive: no other roadmap came meanwhile.
         # With workers, the node's planner reads the mapped files too, and
         # the received roadmap's memory goes with the replaced state.
@@ -297,10 +338,64 @@ class PlannerNode(Node):
             f"planning index ready, {self._state.workers.count if self._state.workers else 0} "
             f"plan worker(s) started in {time.perf_counter() - begin:.3f} s")
 
+    def _world_for(self, planner):
+        """The current scene applied to a new roadmap's planner, or None
+        without a scene; a scene that does not fit the new roadmap is
+        dropped (logged and echoed as no scene)."""
+        if self._scene is None:
+            return None
+        try:
+            return planner.apply_scene(self._scene)
+        except Exception as exc:  # a bug there must not take the node down either
+            self.refused_scenes += 1
+            self.get_logger().error(f"dropping the scene, which does not fit the new roadmap, "
+                                    f"and planning without one: {exc}")
+            self._scene = self._scene_stamp = None
+            self._echo_scene()
+            return None
+
+    def _on_scene(self, msg):
+        begin = time.perf_counter()
+        try:
+            scene = scene_from_msg(msg)
+            if is_empty_scene(scene):
+                scene = None
+            state = self._state
+            # Until a roadmap comes, the scene waits for it (_world_for).
+            world = None if scene is None or state is None else state.planner.apply_scene(scene)
+        except Exception as exc:  # GWRError: a bad scene; anything else a bug
+            self.refused_scenes += 1
+            self.get_logger().error(f"refusing a scene, planning on in the previous one: "
+                                    f"{exc if isinstance(exc, GWRError) else repr(exc)}")
+            return
+        self._scene, self._scene_stamp = scene, msg.header.stamp
+        if state is None:
+            self.get_logger().info("keeping the scene for the first roadmap")
+            return
+        # Requests started before go on in the previous scene.
+        self._state = _State(state.planner, state.stamp, state.workers, world)
+        self._echo_scene()
+        self.get_logger().info(
+            "planning without a scene" if scene is None else
+            f"planning in a new scene: {len(scene.polygons) + len(scene.discs)} obstacle(s), "
+            f"{len(scene.limits.strokes)} stroke(s), {len(scene.limits.passive)} passive "
+            f"range(s), ready in {time.perf_counter() - begin:.3f} s")
+
+    def _echo_scene(self):
+        """Publish the scene planned with on ``~/current_scene``."""
+        header = Header(stamp=self._scene_stamp or self.get_clock().now().to_msg(),
+                        frame_id=BASE_FRAME)
+        self.scene_pub.publish(Scene(header=header) if self._scene is None
+                               else scene_to_msg(self._scene, header))
+
     def _plan(self, state, start, goal, options, termination):
         """A plan from the state's workers, or from its planner here when it
-        has none or the worker planning it failed (killed, not replaced: it
-        might fail again)."""
+        has none, the worker planning it failed (killed, not replaced: it
+        might fail again) or the state has a scene."""
+        if state.world is not None:
+            # The workers map the roadmap and its planning index, and know no
+            # scene: plans in a scene are made in the node's process.
+            return state.planner.plan(start, goal, options, termination, world=state.world)
         workers = state.workers
         if workers is not None:
             try:

@@ -8,8 +8,9 @@ from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityP
 __all__ = ["LATCHED_QOS", "STATE_QOS", "SENSOR_QOS", "SERVICE_QOS", "PASSIVE_JOINT_NAMES",
            "BASE_FRAME"]
 
-# Maps and roadmaps, as nav2's map server: the latest one, to late joiners too
-# (subscribers use the same profile).
+# Maps, roadmaps and scenes (and the scene each node applies), as nav2's map
+# server: the latest one, to late joiners too (subscribers use the same
+# profile).
 LATCHED_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                          reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL)

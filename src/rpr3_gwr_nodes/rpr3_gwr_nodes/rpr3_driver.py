@@ -17,12 +17,13 @@ mode unless a singularity is crossed.
   and QoS as the joint states, frame ``base``): base points, legs (with
   the elbows or slider joints of the mechanisms that have them) and
   platform, coloured from green (margin ``warn_margin`` and above) to red
-  (``abort_margin``);
+  (``abort_margin``), and after a collision abort the body that would have
+  collided, magenta;
 * ``/diagnostics`` (diagnostic_msgs/DiagnosticArray, same QoS, 1 Hz and at
   once on an abort): the normalised det(Jx) margin m with level OK when
   ``|m| >= warn_margin``, WARN when ``abort_margin <= |m| < warn_margin``,
   ERROR when ``|m| < abort_margin`` or while the driver holds after an abort
-  (until a reset or a goal that succeeds);
+  on a singularity or a collision (until a reset or a goal that succeeds);
 * ``execute_trajectory`` (rpr3_gwr_msgs/ExecuteTrajectory action): replays a
   JointTrajectory in real time (scaled by ``time_scale``).  As ros2_controllers'
   joint_trajectory_controller does, a goal is validated when it arrives and
@@ -39,8 +40,24 @@ mode unless a singularity is crossed.
   driver checks where the platform would go: if the margin would fall below
   ``abort_margin``, det(Jx) would change sign, or the platform could not
   follow, it aborts the goal, says why and with which margin, and holds still
-  at the last safe joints;
-* ``reset`` (rpr3_gwr_msgs/ResetDriver): puts the platform at a configuration.
+  at the last safe joints.  In a scene, each control step's stretch of the
+  path (from the current joints through the waypoints passed to the
+  step's target) is then checked continuously with the core
+  (``path_collisions``): if a body would come within ``obstacle_clearance``
+  of an obstacle, bodies would overlap, or a joint would leave its range,
+  the goal aborts with ``COLLISION_ABORT`` before the step, naming the body
+  (or joint) and the obstacle (or range), and the driver holds at the last
+  free joints;
+* ``scene`` (rpr3_gwr_msgs/Scene, reliable, transient local, as the
+  planner's): the obstacles and limits executions are checked against, from
+  the next control step on (one without obstacles and joint ranges: none).
+  A scene that cannot be read or names joints the mechanism lacks is
+  refused with an error in the log and the previous one stays.  The scene
+  in use is echoed on ``~/current_scene`` (same QoS, the received header
+  stamp) and drawn on ``scene_markers`` (visualization_msgs/MarkerArray, same
+  QoS, frame ``base``);
+* ``reset`` (rpr3_gwr_msgs/ResetDriver): puts the platform at a configuration
+  (scenes do not restrict it: a simulation may start anywhere).
 """
 
 import math
@@ -60,17 +77,21 @@ from rpr3_gwr_core.mechanisms.continuation import CANNOT_FOLLOW, CROSSED, follow
 from rpr3_gwr_core.paper import PAPER_GEOMETRY
 from rpr3_gwr_core.planning import DEFAULT_MAX_STEP
 from rpr3_gwr_core.planning.locate import DEFAULT_MODE_TOL
+from rpr3_gwr_core.world import configuration_collision, path_collisions
+from rpr3_gwr_core.world.collision import INTERFERENCE, OBSTACLE
 from rpr3_gwr_msgs.action import ExecuteTrajectory
-from rpr3_gwr_msgs.msg import PlatformPose
+from rpr3_gwr_msgs.msg import PlatformPose, Scene
 from rpr3_gwr_msgs.srv import ResetDriver
 from sensor_msgs.msg import JointState
+from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
 
-from .conversions import configuration_from_msg, duration_msg, pose_msg
+from .conversions import (configuration_from_msg, duration_msg, is_empty_scene, pose_msg,
+                          scene_from_msg, scene_to_msg)
 from .mechanism_parameters import box_middle, declare_mechanism
-from .profiles import PASSIVE_JOINT_NAMES, STATE_QOS
+from .profiles import BASE_FRAME, LATCHED_QOS, PASSIVE_JOINT_NAMES, STATE_QOS
 from .spin import run
-from .visualization import mechanism_markers
+from .visualization import mechanism_markers, scene_markers
 
 __all__ = ["Rpr3Driver", "main"]
 
@@ -82,6 +103,16 @@ _PAPER_START = [17.0, 12.0, 18.0, math.radians(122.82)]
 
 def _seconds(duration):
     return duration.sec + duration.nanosec * 1e-9
+
+
+def _collision_reason(hit, clearance):
+    """What a core Collision found ahead means for the driver."""
+    if hit.kind == OBSTACLE:
+        return (f"{hit.body} would come within obstacle_clearance {clearance:g} of obstacle "
+                f"{hit.other!r}")
+    if hit.kind == INTERFERENCE:
+        return f"{hit.body} and {hit.other} would overlap"
+    return f"joint {hit.body} would leave its range {hit.other}"
 
 
 def _slope(times, positions, t):
@@ -141,6 +172,13 @@ class Rpr3Driver(Node):
         self._active = False  # a goal is accepted or executing (under _lock)
         self._holding = ""  # why the driver holds after an abort, "" when it does not
         self._stopping = threading.Event()
+        # The scene steps are checked against (None: none), swapped as one
+        # reference; the collision a goal aborted on (under _lock, None when
+        # there is none to show).
+        self._scene = None
+        self._collision = None
+        # Scene messages refused (unreadable, or naming unknown joints).
+        self.refused_scenes = 0
         # Not given for a mechanism other than the paper's: unset.
         initial = self.get_parameter_or("initial_configuration",
                                         Parameter("initial_configuration")).value
@@ -156,6 +194,10 @@ class Rpr3Driver(Node):
                           callback_group=timers)
         self.create_timer(1.0, self._publish_diagnostics, callback_group=timers)
         self.create_service(ResetDriver, "reset", self._on_reset)
+        self.scene_pub = self.create_publisher(Scene, "~/current_scene", LATCHED_QOS)
+        self.scene_marker_pub = self.create_publisher(MarkerArray, "scene_markers", LATCHED_QOS)
+        self.create_subscription(Scene, "scene", self._on_scene, LATCHED_QOS,
+                                 callback_group=MutuallyExclusiveCallbackGroup())
         self._action = ActionServer(
             self, ExecuteTrajectory, "execute_trajectory", self._execute,
             goal_callback=self._on_goal, cancel_callback=lambda _: CancelResponse.ACCEPT,
@@ -245,9 +287,12 @@ class Rpr3Driver(Node):
         msg.name, msg.position, msg.velocity = names, position, speed
         self.joint_pub.publish(msg)
         self.pose_pub.publish(pose_msg(self.mechanism, pose))
+        with self._lock:
+            collision = self._collision
         self.marker_pub.publish(mechanism_markers(
             self.mechanism, pose, rho, margin, self.get_parameter("warn_margin").value,
-            self.get_parameter("abort_margin").value, msg.header.stamp))
+            self.get_parameter("abort_margin").value, msg.header.stamp,
+            None if collision is None else collision.body))
 
     def diagnostic_status(self):
         """The singularity status (the module doc gives its levels)."""
@@ -273,6 +318,33 @@ class Rpr3Driver(Node):
         array.header.stamp = self.get_clock().now().to_msg()
         self.diag_pub.publish(array)
 
+    # --- scene -------------------------------------------------------------------------------
+
+    def _on_scene(self, msg):
+        try:
+            scene = scene_from_msg(msg)
+            if is_empty_scene(scene):
+                scene = None
+                inside = None
+            else:
+                # Checks the limits' names against the mechanism (and loads
+                # the collision kernels before a goal needs them).
+                rho, pose, _ = self.state()
+                inside = configuration_collision(self.mechanism, scene, rho, pose)
+        except Exception as exc:  # GWRError: a bad scene; anything else a bug
+            self.refused_scenes += 1
+            self.get_logger().error(f"refusing a scene, checking against the previous one: "
+                                    f"{exc if isinstance(exc, GWRError) else repr(exc)}")
+            return
+        self._scene = scene
+        header = Header(stamp=msg.header.stamp, frame_id=BASE_FRAME)
+        self.scene_pub.publish(Scene(header=header) if scene is None
+                               else scene_to_msg(scene, header))
+        self.scene_marker_pub.publish(scene_markers(scene, msg.header.stamp))
+        if inside is not None:
+            self.get_logger().warning(f"the new scene holds the platform where it is: "
+                                      f"{inside.message}; goals abort until a reset frees it")
+
     # --- reset -------------------------------------------------------------------------------
 
     def _on_reset(self, request, response):
@@ -288,6 +360,7 @@ class Rpr3Driver(Node):
                 self.rho, self.pose, self.margin = rho, pose, margin
                 self.velocity = np.zeros(len(rho))
                 self._holding = ""
+                self._collision = None
         except _Refused as exc:
             response.error_code, response.error_msg = exc.code, str(exc)
             return response
@@ -400,6 +473,8 @@ class Rpr3Driver(Node):
         moved = self._start_gap(positions[0])
         if moved is not None:
             return self._abort(goal_handle, result, _Result.START_MISMATCH, moved, None)
+        with self._lock:
+            self._collision = None  # the highlight is of the goal that aborted on it
         scale = self.get_parameter("time_scale").value
         abort_margin = self.get_parameter("abort_margin").value
         period = 1.0 / self.get_parameter("rate").value
@@ -442,6 +517,16 @@ class Rpr3Driver(Node):
                                    f"singularity margin would fall to {abs(extreme):.2e} "
                                    f"< abort_margin {abort_margin:g} {at}",
                                    min(smallest, abs(extreme)))
+            scene = self._scene
+            if scene is not None:
+                hit = path_collisions(self.mechanism, scene,
+                                      np.array([rho, *positions[between], target]), pose)
+                if hit is not None:
+                    with self._lock:
+                        self._collision = hit
+                    return self._abort(goal_handle, result, _Result.COLLISION_ABORT,
+                                       f"{_collision_reason(hit, scene.limits.obstacle_clearance)}"
+                                       f" {at}: holding at the last free joints", smallest)
             smallest = min(smallest, abs(extreme))
             with self._lock:
                 self.velocity = _slope(times, positions, elapsed)
@@ -457,6 +542,7 @@ class Rpr3Driver(Node):
         goal_handle.succeed()
         with self._lock:
             self._holding = ""
+            self._collision = None
         result.error_code = _Result.SUCCESS
         return self._finish(result, smallest)
 
@@ -481,7 +567,8 @@ class Rpr3Driver(Node):
 
     def _abort(self, goal_handle, result, code, reason, smallest):
         self.get_logger().warning(f"aborting the trajectory and holding still: {reason}")
-        if code in (_Result.SINGULARITY_ABORT, _Result.ASSEMBLY_MODE_LEFT):
+        if code in (_Result.SINGULARITY_ABORT, _Result.ASSEMBLY_MODE_LEFT,
+                    _Result.COLLISION_ABORT):
             with self._lock:
                 self._holding = f"holding after an abort: {reason}"
         goal_handle.abort()

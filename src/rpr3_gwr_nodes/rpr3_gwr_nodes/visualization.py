@@ -1,5 +1,5 @@
 """Standard messages for RViz and Foxglove: the mechanism, the n-solution
-field, the roadmap and planned paths.
+field, the roadmap, planned paths and a scene's obstacles.
 
 Two frames: ``base`` (:data:`~.profiles.BASE_FRAME`), the plane of the
 mechanism, where it and the platform's path are drawn; and ``joint_space``
@@ -19,11 +19,13 @@ from rpr3_gwr_core.mechanisms import FiveBar
 from .profiles import BASE_FRAME
 
 __all__ = ["JOINT_SPACE_FRAME", "mechanism_points", "mechanism_markers", "field_maps",
-           "roadmap_markers", "path_markers", "margin_color"]
+           "roadmap_markers", "path_markers", "margin_color", "scene_markers"]
 
 JOINT_SPACE_FRAME = "joint_space"
 _BLUE = ColorRGBA(r=0.2, g=0.4, b=0.9, a=1.0)
 _GREY = ColorRGBA(r=0.5, g=0.5, b=0.5, a=1.0)
+_OBSTACLE = ColorRGBA(r=0.9, g=0.5, b=0.1, a=0.8)
+_COLLISION = ColorRGBA(r=1.0, g=0.0, b=1.0, a=1.0)
 
 
 def margin_color(margin, warn, abort):
@@ -86,10 +88,10 @@ def mechanism_points(mechanism, pose, joints):
     return base, np.stack([base, moving, corners], axis=1), corners
 
 
-def mechanism_markers(mechanism, pose, joints, margin, warn, abort, stamp):
+def mechanism_markers(mechanism, pose, joints, margin, warn, abort, stamp, blocked=None):
     """A mechanism at a pose in ``base``: base joints, legs and platform
     (:func:`mechanism_points`), the legs and platform coloured by the margin
-    (:func:`margin_color`).
+    (:func:`margin_color`), and the body that would collide highlighted.
 
     Parameters
     ----------
@@ -105,15 +107,19 @@ def mechanism_markers(mechanism, pose, joints, margin, warn, abort, stamp):
     warn, abort : float
         The driver's margin thresholds.
     stamp : builtin_interfaces.msg.Time
+    blocked : str, optional
+        The body (a name of ``Mechanism.bodies``, e.g. ``leg2`` or
+        ``platform``) that a collision stopped.
 
     Returns
     -------
     visualization_msgs.msg.MarkerArray
         Namespaces ``base`` (a sphere list of the base joints), ``legs`` (a
         line list of each leg's segments: A_i B_i for the 3-RPR, A_i C_i and
-        C_i B_i through the elbows or slider joints C_i) and ``platform`` (a
+        C_i B_i through the elbows or slider joints C_i), ``platform`` (a
         closed line strip B1 B2 B3; the five-bar's end effector as a sphere
-        list).
+        list) and ``collision`` (the ``blocked`` body's outline, magenta and
+        thicker; deleted when there is none or it names a joint).
     """
     base, legs, corners = mechanism_points(mechanism, pose, joints)
     color = margin_color(margin, warn, abort)
@@ -129,7 +135,61 @@ def mechanism_markers(mechanism, pose, joints, margin, warn, abort, stamp):
         platform = _marker(stamp, BASE_FRAME, "platform", Marker.SPHERE_LIST,
                            0.05 * _size(base), color)
         platform.points = _points(corners)
-    return MarkerArray(markers=[bases, lines, platform])
+    return MarkerArray(markers=[bases, lines, platform,
+                                _blocked_body(mechanism, pose, joints, blocked, base, stamp)])
+
+
+def _blocked_body(mechanism, pose, joints, name, base, stamp):
+    """The ``collision`` marker: the named body's outline, or a deletion."""
+    marker = _marker(stamp, BASE_FRAME, "collision", Marker.LINE_STRIP, 0.04 * _size(base),
+                     _COLLISION)
+    bodies = None if name is None else mechanism.bodies(
+        np.asarray(pose, dtype=float)[None], np.asarray(joints, dtype=float)[None])
+    if bodies is None or name not in bodies.names:
+        marker.action = Marker.DELETE
+        return marker
+    k = bodies.names.index(name)
+    n_capsules = bodies.capsules.shape[-3]
+    if k < n_capsules:
+        marker.points = _points(bodies.capsules.reshape(-1, 2, 2)[k])
+    else:
+        outline = bodies.polygons.reshape(-1, *bodies.polygons.shape[-2:])[k - n_capsules]
+        marker.points = _points(np.vstack([outline, outline[:1]]))
+    return marker
+
+
+def scene_markers(scene, stamp):
+    """A scene's obstacles in ``base``: after a deletion of every marker (the
+    previous scene's), a flat cylinder per disc and a closed line strip per
+    polygon, namespace ``obstacles``, each marker's ``text`` its id.
+
+    Parameters
+    ----------
+    scene : rpr3_gwr_core.world.Scene or None
+        None draws nothing (no scene).
+    stamp : builtin_interfaces.msg.Time
+
+    Returns
+    -------
+    visualization_msgs.msg.MarkerArray
+    """
+    clear = Marker(header=Header(stamp=stamp, frame_id=BASE_FRAME), action=Marker.DELETEALL)
+    markers = [clear]
+    if scene is None:
+        return MarkerArray(markers=markers)
+    for k, polygon in enumerate(scene.polygons):
+        marker = _marker(stamp, BASE_FRAME, "obstacles", Marker.LINE_STRIP, 0.1, _OBSTACLE, k)
+        marker.points = _points(np.vstack([polygon.vertices, polygon.vertices[:1]]))
+        marker.text = polygon.id
+        markers.append(marker)
+    for k, disc in enumerate(scene.discs, start=len(scene.polygons)):
+        marker = _marker(stamp, BASE_FRAME, "obstacles", Marker.CYLINDER, 2 * disc.radius,
+                         _OBSTACLE, k)
+        marker.scale.z = 0.1
+        marker.pose.position = Point(x=float(disc.center[0]), y=float(disc.center[1]), z=0.0)
+        marker.text = disc.id
+        markers.append(marker)
+    return MarkerArray(markers=markers)
 
 
 def _size(base):
