@@ -9,7 +9,10 @@ of ``--obstacles`` obstacles (discs and quadrilaterals in the workspace
 around the base, clearance 0.25) the median and largest time from a scene
 to its usable scene roadmap (blocked solutions, parts, part components), the
 feasibility of the paper's first example, and the resident memory after
-the first and the last scene (no growth with the number of scenes).
+the first and the last scene (no growth with the number of scenes); then
+plan times (p50, p95, max) of ``--pairs`` random same-aspect pairs of patch
+solutions the last scene leaves free, without a scene and in it, and their
+ratio (target: within 2x).
 """
 
 import argparse
@@ -20,7 +23,7 @@ import time
 
 import numpy as np
 
-from rpr3_gwr_core import PAPER_GEOMETRY
+from rpr3_gwr_core import GWRError, PAPER_GEOMETRY, Planner
 from rpr3_gwr_core.io.cache import cached_planning
 from rpr3_gwr_core.paper import FULL_BASE_GRID, FULL_REFINEMENT, PAPER_GRID
 from rpr3_gwr_core.planning.locate import locate
@@ -51,7 +54,46 @@ def resident_mb():
     return float("nan")
 
 
-def run(name, roadmap, args, example):
+def _pairs(roadmap, restricted, rng, count):
+    """Same-aspect pairs of patch solutions the scene leaves free, as
+    configurations (joints, then the mode coordinate)."""
+    seg = roadmap.segmentation
+    mechanism = roadmap.mechanism
+    cells, slots = np.nonzero(restricted.free & (seg.patch > 0))
+    aspect = np.sign(seg.field.margin[cells, slots])
+    pairs = []
+    while len(pairs) < count:
+        a, b = rng.integers(cells.size, size=2)
+        if aspect[a] == aspect[b] and abs(seg.field.margin[cells[a], slots[a]]) > 0.01 \
+                and abs(seg.field.margin[cells[b], slots[b]]) > 0.01:
+            pairs.append(tuple(
+                (*roadmap.grid.joints_of(int(cells[k])),
+                 float(seg.field.poses[cells[k], slots[k], mechanism.mode_coordinate]))
+                for k in (a, b)))
+    return pairs
+
+
+def _plan_times(planner, pairs, world):
+    """Milliseconds of each plan (failures included) and how many succeeded."""
+    times, succeeded = [], 0
+    for start, goal in pairs:
+        begin = time.perf_counter()
+        try:
+            planner.plan(start, goal, world=world)
+            succeeded += 1
+        except GWRError:
+            pass
+        times.append(1e3 * (time.perf_counter() - begin))
+    return times, succeeded
+
+
+def _quantiles(times):
+    ordered = sorted(times)
+    p95 = ordered[int(0.95 * (len(ordered) - 1))]
+    return [round(statistics.median(ordered), 2), round(p95, 2), round(ordered[-1], 2)]
+
+
+def run(name, roadmap, index, args, example):
     start = time.perf_counter()
     world = WorldIndex(roadmap)
     built = time.perf_counter() - start
@@ -84,6 +126,20 @@ def run(name, roadmap, args, example):
         "rss_mb_after_first_scene": round(first_memory),
         "rss_mb_after_last": round(resident_mb())}),
         flush=True)
+    planner = Planner(roadmap, index)
+    planner.warm_up()
+    in_scene = planner.apply_scene(scene)
+    pairs = _pairs(roadmap, in_scene, np.random.default_rng(args.seed + 1), args.pairs)
+    _plan_times(planner, pairs[:3], in_scene)  # the scene's kernels load
+    empty, empty_ok = _plan_times(planner, pairs, None)
+    scened, scened_ok = _plan_times(planner, pairs, in_scene)
+    line = {"roadmap": name, "pairs": len(pairs),
+            "plan_ms_p50_p95_max_without_scene": _quantiles(empty),
+            "succeeded_without_scene": empty_ok,
+            "plan_ms_p50_p95_max_in_scene": _quantiles(scened), "succeeded_in_scene": scened_ok}
+    line["ratio_p50_p95"] = [round(b / a, 2) for a, b in zip(line[
+        "plan_ms_p50_p95_max_without_scene"][:2], line["plan_ms_p50_p95_max_in_scene"][:2])]
+    print(json.dumps(line), flush=True)
 
 
 def main():
@@ -92,14 +148,16 @@ def main():
     parser.add_argument("--obstacles", type=int, default=10)
     parser.add_argument("--scenes", type=int, default=21)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--pairs", type=int, default=100,
+                        help="random pairs planned without and in a scene")
     args = parser.parse_args()
-    roadmap, _, _ = cached_planning(PAPER_GEOMETRY, PAPER_GRID)
-    run("paper_rho17_401x401", roadmap, args, EXAMPLE)
+    roadmap, index, _ = cached_planning(PAPER_GEOMETRY, PAPER_GRID)
+    run("paper_rho17_401x401", roadmap, index, args, EXAMPLE)
     if args.full:
-        del roadmap
-        roadmap, _, _ = cached_planning(PAPER_GEOMETRY, FULL_BASE_GRID,
-                                        refinement=FULL_REFINEMENT)
-        run("full_3dof", roadmap, args, None)
+        del roadmap, index
+        roadmap, index, _ = cached_planning(PAPER_GEOMETRY, FULL_BASE_GRID,
+                                            refinement=FULL_REFINEMENT)
+        run("full_3dof", roadmap, index, args, None)
 
 
 if __name__ == "__main__":

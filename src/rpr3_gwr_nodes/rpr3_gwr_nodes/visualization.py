@@ -14,7 +14,6 @@ from geometry_msgs.msg import Point, Pose
 from nav_msgs.msg import MapMetaData, OccupancyGrid
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
-from rpr3_gwr_core.mechanisms import FiveBar
 
 from .profiles import BASE_FRAME
 
@@ -49,43 +48,29 @@ def _marker(stamp, frame, namespace, kind, scale, color, identity=0):
 
 def mechanism_points(mechanism, pose, joints):
     """What :func:`mechanism_markers` draws of a mechanism at a pose and its
-    joints, in ``base`` [length unit].
-
-    The core places the 3-RPR's platform points (from the legs and their
-    directions), the moving base points of the 3-RRR and 3-PRR (elbows,
-    slider joints: ``base_points``) and, through the 3-RPR of the same
-    platform (``platform``), their platform points; the five-bar's elbows
-    follow its module's convention ``C_i = A_i + l1 (cos th_i, sin th_i)``,
-    which the core computes only inside its kernels.
+    joints, in ``base`` [length unit]: the outline the mechanism gives of its
+    bodies (``Mechanism.body_outline``), so any mechanism that describes its
+    bodies is drawn, links through its elbows or slider joints included.
 
     Returns
     -------
     base : ndarray, shape (k, 2)
-        The fixed base joints.
+        The fixed base joints, the first point of each leg.
     legs : ndarray, shape (k, m, 2)
         Each leg as a polyline from its base joint to the platform (through
         its elbow or slider joint when it has one).
     platform : ndarray, shape (p, 2)
-        The platform's corners (the five-bar's end effector alone).
+        The platform's corners; a mechanism without a platform plate (the
+        five-bar) has its legs' common end point, the end effector.
     """
-    joints = np.asarray(joints, dtype=float)
-    pose = np.asarray(pose, dtype=float)
-    if isinstance(mechanism, FiveBar):
-        base = np.array([[0.0, 0.0], [mechanism.d, 0.0]])
-        elbows = base + mechanism.l1 * np.stack([np.cos(joints), np.sin(joints)], axis=-1)
-        tip = np.broadcast_to(pose[:2], (2, 2))
-        return base, np.stack([base, elbows, tip], axis=1), pose[None, :2]
-    platform = getattr(mechanism, "platform", mechanism)
-    base = platform.base
-    # B_i from the legs' lengths and directions (for the 3-RPR the joints the
-    # driver reports).
-    theta = platform.passive_angles(pose)
-    corners = base + platform.inverse(pose)[:, None] * np.stack(
-        [np.cos(theta), np.sin(theta)], axis=-1)
-    if platform is mechanism:
-        return base, np.stack([base, corners], axis=1), corners
-    moving = mechanism.base_points(joints)
-    return base, np.stack([base, moving, corners], axis=1), corners
+    links, plates, _ = mechanism.body_outline(np.asarray(pose, dtype=float),
+                                              np.asarray(joints, dtype=float))
+    legs = {}
+    for _, leg, _, start, stop, _ in links:
+        legs.setdefault(leg, [np.asarray(start)]).append(np.asarray(stop))
+    polylines = np.array([legs[leg] for leg in sorted(legs)])
+    platform = np.asarray(plates[0][2]) if plates else polylines[:1, -1]
+    return polylines[:, 0], polylines, platform
 
 
 def mechanism_markers(mechanism, pose, joints, margin, warn, abort, stamp, blocked=None):
