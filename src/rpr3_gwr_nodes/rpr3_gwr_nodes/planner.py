@@ -198,7 +198,14 @@ class PlannerNode(Node):
                         "tried when the shortest ones cannot be repaired",
             floating_point_range=[FloatingPointRange(from_value=0.0, to_value=1000.0)],
             read_only=True))
+        self.declare_parameter("promising_nodes", defaults.promising_nodes, ParameterDescriptor(
+            description="Nodes each local search may settle, on a roadmap of all the joints, "
+                        "in the two most promising searches tried before the global paths "
+                        "(any gates, then the cheapest patches); 0 tries the global paths only",
+            integer_range=[IntegerRange(from_value=0, to_value=100_000_000, step=1)],
+            read_only=True))
         self._retries = Retries(
+            promising_nodes=self.get_parameter("promising_nodes").value,
             global_paths=self.get_parameter("retry_global_paths").value,
             repairs=self.get_parameter("retry_repairs").value,
             split_shortcuts=self.get_parameter("retry_split_shortcuts").value,

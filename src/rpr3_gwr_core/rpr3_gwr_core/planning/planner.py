@@ -87,7 +87,7 @@ class Retries:
     """
 
     global_paths: int = 16
-    promising_nodes: int = 200_000
+    promising_nodes: int = 50_000
     repairs: int = 4
     split_shortcuts: int = 6
     detour_weight: float = 10.0
