@@ -25,7 +25,7 @@ own: its two global paths go through regions 6, 4, 2, 1 and 6, 5, 2, 1.
 True
 """
 
-import importlib
+from ._lazy import lazy_exports
 
 # Names are loaded on first use (PEP 562), so that ``rpr3-gwr --help`` and
 # light modules such as the exceptions do not load numpy and the compiled
@@ -40,21 +40,12 @@ _SOURCES = {
     ".planning": ("Planner", "PlanOptions", "Plan", "Termination"),
     ".exceptions": ("GWRError", "InvalidInputError", "OutOfGridError",
                     "FixedJointMismatchError", "NoSolutionError", "AssemblyModeError",
-                    "SingularityError", "InfeasiblePathError", "ValidationError",
-                    "PlanningTimeoutError"),
+                    "SingularityError", "InfeasiblePathError", "CollisionError",
+                    "ValidationError", "PlanningTimeoutError"),
 }
 _SOURCE_OF = {name: module for module, names in _SOURCES.items() for name in names}
 
 __all__ = [name for names in _SOURCES.values() for name in names]
 
 
-def __getattr__(name):
-    if name not in _SOURCE_OF:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(_SOURCE_OF[name], __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _SOURCE_OF)

@@ -3,6 +3,7 @@ the five-bar, the 3-RRR and the 3-PRR."""
 
 import importlib
 
+from .._lazy import lazy_exports
 from . import base
 from .base import Mechanism, register_mechanism
 
@@ -37,13 +38,4 @@ def mechanism_from_dict(data):
     return base.mechanism_from_dict(data)
 
 
-def __getattr__(name):
-    if name not in _MODULE_OF_NAME:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(_MODULE_OF_NAME[name], __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _MODULE_OF_NAME)

@@ -5,7 +5,7 @@ Names are loaded on first use (PEP 562): the mechanisms import
 :mod:`.bodies`, and :mod:`.collision` imports the mechanisms' continuation.
 """
 
-import importlib
+from .._lazy import lazy_exports
 
 _SOURCES = {
     ".bodies": ("Bodies", "BodyModel", "assemble_bodies", "body_model_from_dict"),
@@ -20,13 +20,4 @@ _SOURCE_OF = {name: module for module, names in _SOURCES.items() for name in nam
 __all__ = [name for names in _SOURCES.values() for name in names]
 
 
-def __getattr__(name):
-    if name not in _SOURCE_OF:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(_SOURCE_OF[name], __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _SOURCE_OF)
