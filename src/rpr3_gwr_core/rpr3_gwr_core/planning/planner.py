@@ -369,32 +369,11 @@ class Planner:
             return Plan(True, answer.reason, s, g, paths,
                         joints=np.zeros((0, mechanism.n_joints)),
                         poses=np.zeros((0, mechanism.pose_size)))
-        failures = []
         found = None
         if world is not None or (not options.weighted and not self.roadmap.grid.fixed):
             found = self._promising(s, g, options.clearance, termination, world)
-        for path in self._attempts(paths, s.patch, g.patch):
-            if found is not None:
-                break
-            try:
-                if termination():
-                    raise PlanningTimeoutError("the time limit passed")
-                result, joints, patches = self._validated_path(path, s, g, options.clearance,
-                                                               termination, world=world)
-            except InfeasiblePathError as exc:
-                failures.append(f"path {list(path.patches)}: {exc}")
-                continue
-            except PlanningTimeoutError as exc:
-                raise PlanningTimeoutError(
-                    f"{exc} after {len(failures)} global path(s) without a valid trajectory"
-                    + "".join(f"; {f}" for f in failures)) from None
-            if not result.ok:
-                failures.append(f"path {list(path.patches)}: {result.reason}")
-                continue
-            found = path, result, joints, patches
         if found is None:
-            raise ValidationError("no global path gave a valid trajectory: "
-                                  + "; ".join(failures))
+            found = self._along_global_paths(paths, s, g, options.clearance, termination, world)
         path, result, joints, patches = found
         if path.patches not in {p.patches for p in paths}:
             paths.append(path)
@@ -414,6 +393,36 @@ class Planner:
                     poses=result.poses, patches=patches, times=timing[0],
                     velocities=timing[1], accelerations=timing[2], validation=result,
                     smoothed=smoothed)
+
+    def _along_global_paths(self, paths, s, g, clearance, termination, world):
+        """The first global path (:meth:`_attempts`) whose local path passes
+        the validator, with that validation, legs and waypoint patches.
+
+        Raises
+        ------
+        ValidationError
+            When none does, with what each one failed on.
+        PlanningTimeoutError
+            When the deadline passes first.
+        """
+        failures = []
+        for path in self._attempts(paths, s.patch, g.patch):
+            try:
+                if termination():
+                    raise PlanningTimeoutError("the time limit passed")
+                result, joints, patches = self._validated_path(path, s, g, clearance,
+                                                               termination, world=world)
+            except InfeasiblePathError as exc:
+                failures.append(f"path {list(path.patches)}: {exc}")
+                continue
+            except PlanningTimeoutError as exc:
+                raise PlanningTimeoutError(
+                    f"{exc} after {len(failures)} global path(s) without a valid trajectory"
+                    + "".join(f"; {f}" for f in failures)) from None
+            if result.ok:
+                return path, result, joints, patches
+            failures.append(f"path {list(path.patches)}: {result.reason}")
+        raise ValidationError("no global path gave a valid trajectory: " + "; ".join(failures))
 
     def _promising(self, s, g, clearance, termination, world=None):
         """The first path of the two most promising searches that validates,
