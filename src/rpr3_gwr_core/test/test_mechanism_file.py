@@ -9,7 +9,8 @@ import pytest
 
 from rpr3_gwr_core.exceptions import InvalidInputError
 from rpr3_gwr_core.io.cli import main
-from rpr3_gwr_core.io.mechanism_file import load_mechanism_file, mechanism_file_from_dict
+from rpr3_gwr_core.io.mechanism_file import (UNIFORM_CELLS, load_mechanism_file,
+                                              mechanism_file_from_dict, roadmap_grid)
 from rpr3_gwr_core.mechanisms import DEFAULT_FIVE_BAR, DEFAULT_THREE_RRR
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID
 
@@ -42,6 +43,17 @@ def test_the_three_rrr_file_is_the_default_three_rrr_on_its_torus():
     assert [a.periodic for a in described.axes] == [True, True, True]
     slice_ = described.grid({"th1": 0.0})
     assert slice_.fixed == ((0, 0.0),) and slice_.shape == (120, 120)
+
+
+def test_a_large_box_of_all_the_joints_builds_adaptively():
+    torus = load_mechanism_file(THREE_RRR).grid()
+    assert torus.size > UNIFORM_CELLS
+    base, refinement = roadmap_grid(torus)
+    assert refinement == 4 and base.shape == (30, 30, 30)
+    assert [a.periodic for a in base.axes] == [True, True, True]
+    for grid in (load_mechanism_file(FIVE_BAR).grid(), load_mechanism_file(THREE_RRR).grid(
+            {"th1": 0.0})):
+        assert roadmap_grid(grid) == (grid, None)
 
 
 def _document(**changes):

@@ -42,6 +42,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rpr3_gwr_core.exceptions import GWRError, InvalidInputError
 from rpr3_gwr_core.io.cache import cached_roadmap
+from rpr3_gwr_core.io.mechanism_file import roadmap_grid
 from rpr3_gwr_core.paper import FULL_BASE_GRID, FULL_REFINEMENT, PAPER_GEOMETRY
 from rpr3_gwr_core.workspace import build_roadmap
 from rpr3_gwr_core.workspace.grid import Axis, Grid, check_roadmap_grid
@@ -114,12 +115,12 @@ class RoadmapBuilder(Node):
         return values
 
     def _grid(self, values):
-        """The grid and refinement the parameter values ask for (the full
-        roadmap's refinement is None on a mechanism file's box)."""
+        """The grid and refinement the parameter values ask for (a mechanism
+        file's whole box refined adaptively when it is large, as the CLI's)."""
         if values["full"]:
             if self.mechanism == PAPER_GEOMETRY:
                 return FULL_BASE_GRID, FULL_REFINEMENT
-            return self.described.grid(), None
+            return roadmap_grid(self.described.grid())
         first = self.mechanism.joint_names[0]
         box = self.described.grid({first: values["fixed_value"]})
         ranges, step = list(values["ranges"] or []), values["step"]

@@ -23,8 +23,6 @@ __all__ = ["run"]
 
 # Grid step of the slices of ``cusps --trace`` [length unit].
 _TRACE_STEP = 0.25
-# Largest box of all the joints built as a uniform grid [cells].
-_UNIFORM_CELLS = 1_000_000
 
 
 def run(args):
@@ -127,9 +125,10 @@ def _roadmap(args):
     start = time.perf_counter()
     if args.mechanism is not None:
         from .cache import cached_roadmap
+        from .mechanism_file import roadmap_grid
 
         described, grid = _file_roadmap(args)
-        base, refinement = _refined(grid)
+        base, refinement = roadmap_grid(grid)
         roadmap, hit = cached_roadmap(described.mechanism, base, args.cache_dir,
                                       _Progress(sys.stderr), refinement=refinement)
         if args.slice_figure:
@@ -221,19 +220,6 @@ def _file_roadmap(args):
     return described, grid
 
 
-def _refined(grid):
-    """``(grid, refinement)`` for :func:`~.cache.cached_roadmap`: a box of
-    all the joints with more than :data:`_UNIFORM_CELLS` cells is refined
-    adaptively from a coarse base (only near the singular locus: the
-    3-RRR's 120-cell torus has 1.7 million cells, adaptively 0.9 million),
-    any other grid taken whole."""
-    from ..workspace.adaptive import DEFAULT_REFINEMENT, coarse_base
-
-    if grid.fixed or grid.size <= _UNIFORM_CELLS:
-        return grid, None
-    return coarse_base(grid, DEFAULT_REFINEMENT), DEFAULT_REFINEMENT
-
-
 def _bodies(args):
     """The body model of ``--mechanism``'s file, None for the defaults."""
     if args.mechanism is None:
@@ -299,6 +285,7 @@ def _plan(args):
 def _plan_on_file(args):
     from ..planning import PlanOptions
     from .cache import cached_planning
+    from .mechanism_file import roadmap_grid
 
     described, grid = _file_roadmap(args)
     mechanism = described.mechanism
@@ -314,7 +301,7 @@ def _plan_on_file(args):
                           feasibility_only=args.feasibility_only,
                           max_velocity=args.max_velocity, max_acceleration=args.max_acceleration,
                           **tolerance)
-    base, refinement = _refined(grid)
+    base, refinement = roadmap_grid(grid)
     roadmap, index, _ = cached_planning(mechanism, base, args.cache_dir, _Progress(sys.stderr),
                                         refinement=refinement)
     roadmap_doc = {"mechanism": mechanism.to_dict(), "grid": grid.to_dict()}
