@@ -284,7 +284,7 @@ class ThreeRPR(Mechanism):
         it relative to the platform, ``theta_i - alpha`` (:meth:`Mechanism.body_outline`)."""
         points = self.platform_points(poses)
         base = np.broadcast_to(self.base, points.shape)
-        theta = np.arctan2(points[..., 1] - base[..., 1], points[..., 0] - base[..., 0])
+        theta = self.passive_angles(poses)
         relative = wrap_angle(theta - np.asarray(poses)[..., 2:3])
         links = [(f"leg{i + 1}", i, (f"A{i + 1}", f"B{i + 1}"), base[..., i, :],
                   points[..., i, :], True) for i in range(3)]
