@@ -39,7 +39,7 @@ _SEARCH_RADIUS = 4.0
 _LAND_TOL = 1e-6
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Location:
     """Where a configuration lies on a roadmap.
 
@@ -66,6 +66,12 @@ class Location:
     cell: int
     slot: int
     patch: int
+
+    def __repr__(self):
+        joints = ", ".join(f"{q:.6g}" for q in self.joints)
+        pose = ", ".join(f"{p:.6g}" for p in self.pose)
+        return (f"Location(joints ({joints}), pose ({pose}), patch {self.patch}, "
+                f"cell {self.cell}, signed margin {self.margin:.3g})")
 
 
 def locate(roadmap, configuration, mode_tol=DEFAULT_MODE_TOL, min_margin=DEFAULT_MIN_MARGIN,

@@ -156,7 +156,7 @@ class PlanOptions:
             raise InvalidInputError(f"clearance must lie in [0, 1), got {self.clearance}")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Plan:
     """A planning answer.
 
@@ -198,6 +198,23 @@ class Plan:
     validation: object = None
     smoothed: bool = False
 
+    def __repr__(self):
+        if not self.feasible:
+            return f"Plan(infeasible: {self.reason})"
+        path = (" -> ".join(map(str, self.global_paths[self.path_index].patches))
+                if self.path_index >= 0 else "none")
+        parts = [self.reason, f"global path {path}", f"{len(self.joints)} waypoints"]
+        if len(self.joints) > 1:
+            parts.append(f"length {_joint_length(self.joints):.4g} [joint unit]")
+        if self.times is not None:
+            parts.append(f"{self.times[-1]:.3g} s")
+        if self.validation is not None:
+            parts.append(f"valid, min margin {self.validation.min_margin:.3g}"
+                         if self.validation.ok else f"invalid: {self.validation.reason}")
+        if self.smoothed:
+            parts.append("smoothed")
+        return f"Plan({', '.join(parts)})"
+
     def to_dict(self):
         """Plain-data form (the CLI's JSON)."""
         out = {"feasible": self.feasible, "reason": self.reason,
@@ -214,6 +231,10 @@ class Plan:
         if self.validation is not None:
             out["validation"] = self.validation.as_dict()
         return out
+
+
+def _joint_length(joints):
+    return float(np.linalg.norm(np.diff(joints, axis=0), axis=1).sum())
 
 
 def _location_dict(location):
@@ -278,6 +299,10 @@ class Planner:
         self._sheets = Sheets(roadmap.grid.lattice, roadmap.grid.step, _SAMPLES_PER_CELL,
                               seg.patch, seg.field.margin, seg.field.poses,
                               np.where(mechanism.angular, mechanism.scale, 0.0))
+
+    def __repr__(self):
+        return (f"Planner({self.roadmap!r}, clearance weight {self.clearance_weight:g}, "
+                f"min margin {self.min_margin:g})")
 
     def warm_up(self):
         """Load every compiled kernel a plan can use (or, on a cold numba

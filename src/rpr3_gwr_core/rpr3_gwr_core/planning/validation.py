@@ -35,7 +35,7 @@ _CONVERGED = 1e-10
 _POLISH_ITERATIONS = 3
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Validation:
     """Outcome of :func:`validate_path`.
 
@@ -64,6 +64,11 @@ class Validation:
     steps: int
     poses: np.ndarray
     failed_segment: int = -1
+
+    def __repr__(self):
+        return (f"Validation({'ok' if self.ok else self.reason}, {len(self.poses)} waypoints, "
+                f"min margin {self.min_margin:.3g}, aspect {self.aspect:+d}, "
+                f"{self.steps} steps)")
 
     def as_dict(self):
         """Plain-data summary (no poses)."""

@@ -44,6 +44,9 @@ class PolygonObstacle:
     id: str
     vertices: np.ndarray
 
+    def __repr__(self):
+        return f"PolygonObstacle({self.id!r}, {len(self.vertices)} vertices)"
+
 
 @dataclass(frozen=True, eq=False)
 class DiscObstacle:
@@ -61,6 +64,10 @@ class DiscObstacle:
     id: str
     center: np.ndarray
     radius: float
+
+    def __repr__(self):
+        x, y = self.center
+        return f"DiscObstacle({self.id!r}, center ({x:g}, {y:g}), radius {self.radius:g})"
 
 
 @dataclass(frozen=True)
@@ -98,6 +105,17 @@ class Scene:
     discs: tuple = ()
     limits: Limits = Limits()
 
+    def __repr__(self):
+        limits = self.limits
+        parts = [_count(len(self.polygons), "polygon"), _count(len(self.discs), "disc")]
+        if limits.strokes:
+            parts.append("strokes of " + ", ".join(limits.strokes))
+        if limits.passive:
+            parts.append("ranges of " + ", ".join(limits.passive))
+        if limits.obstacle_clearance:
+            parts.append(f"obstacle clearance {limits.obstacle_clearance:g}")
+        return f"Scene({', '.join(parts)})"
+
     @property
     def obstacle_ids(self):
         """Ids of the polygons, then of the discs."""
@@ -115,6 +133,10 @@ class Scene:
 
 
 EMPTY_SCENE = Scene()
+
+
+def _count(n, noun):
+    return f"{n} {noun}{'' if n == 1 else 's'}"
 
 
 def scene_from_dict(data):

@@ -256,6 +256,12 @@ class SceneRoadmap:
         crowded.flags.writeable = False
         return crowded
 
+    def __repr__(self):
+        patch_solutions = int(self.index.disks.size)
+        blocked = patch_solutions - int(np.count_nonzero(self.free))
+        return (f"SceneRoadmap({self.n_parts} parts, {len(self.gates)} part gates, "
+                f"{blocked} of {patch_solutions} patch solutions blocked; {self.scene!r})")
+
     @property
     def n_parts(self):
         """Number of parts."""

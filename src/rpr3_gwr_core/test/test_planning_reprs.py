@@ -1,0 +1,56 @@
+"""Planning and world objects print a one-line summary, not their arrays."""
+
+import pathlib
+
+import numpy as np
+import pytest
+
+from rpr3_gwr_core.planning.planner import Planner, PlanOptions
+from rpr3_gwr_core.world import load_scene
+
+from test_planning import Q1, Q2
+
+_CONFIG = pathlib.Path(__file__).resolve().parents[3] / "config" / "scenes"
+
+
+@pytest.fixture(scope="module")
+def planner(paper_roadmap):
+    return Planner(paper_roadmap)
+
+
+def _short(text):
+    assert "\n" not in text and "array(" not in text and len(text) < 300, text
+    return text
+
+
+def test_plan_and_its_parts_summarise(planner):
+    plan = planner.plan(Q1, Q2, PlanOptions(smooth=True, max_velocity=1.0,
+                                                         max_acceleration=1.0))
+    text = _short(repr(plan))
+    path = " -> ".join(map(str, plan.global_paths[plan.path_index].patches))
+    assert text.startswith("Plan(") and path in text
+    assert f"{len(plan.joints)} waypoints" in text and "valid" in text
+    assert _short(repr(plan.start)).startswith("Location(")
+    assert f"patch {plan.start.patch}" in repr(plan.start)
+    assert _short(repr(plan.validation)).startswith("Validation(ok")
+    assert _short(repr(planner)).startswith("Planner(")
+
+
+def test_infeasible_plan_says_why(planner):
+    plan = planner.plan(Q1, Q2, PlanOptions(feasibility_only=True))
+    assert plan.feasible and "waypoints" in repr(plan)
+    blank = type(plan)(feasible=False, reason="other_aspect", start=plan.start,
+                       goal=plan.goal, global_paths=[])
+    assert repr(blank) == "Plan(infeasible: other_aspect)"
+
+
+def test_scene_and_scene_roadmap_summarise(planner):
+    scene = load_scene(_CONFIG / "paper_narrowed.yaml")
+    text = _short(repr(scene))
+    assert text == "Scene(1 polygon, 1 disc, obstacle clearance 0.5)"
+    assert _short(repr(scene.discs[0])) == "DiscObstacle('post', center (6, 28), radius 2)"
+    world = planner.apply_scene(scene)
+    text = _short(repr(world))
+    assert text.startswith(f"SceneRoadmap({world.n_parts} parts")
+    blocked = world.index.disks.size - np.count_nonzero(world.free)
+    assert blocked > 0 and f"{blocked} of {world.index.disks.size} patch solutions blocked" in text
