@@ -361,6 +361,64 @@ def test_a_scene_that_cuts_the_roadmap_answers_blocked(planner):
     assert caught.value.reason == "blocked"
 
 
+# Limits that the scene-free plan of the first example breaks on its way and
+# that its start and goal keep.  Strokes below the ~32.7 that rho2 and rho3
+# reach cut its every way; the passive ranges leave another.
+LIMITS = {
+    "rho2_stroke": {"strokes": {"rho2": [5.0, 29.93]}},
+    "rho3_stroke": {"strokes": {"rho3": [5.0, 29.93]}},
+    "base3_range": {"passive": {"base3": [-2.0, 0.9]}},
+    "platform3_range": {"passive": {"platform3": [0.0, 2.3]}},
+}
+
+
+def reference_limits_broken(b, alpha, limits):
+    """Whether the legs' lengths |B_i - A_i| leave their strokes, or the
+    legs' directions (``base``) or those relative to the platform
+    (``platform``) leave their counter-clockwise arcs."""
+    rho = np.linalg.norm(b - A, axis=-1)
+    theta = np.arctan2(b[..., 1] - A[:, 1], b[..., 0] - A[:, 0])
+    broken = np.zeros(b.shape[:-2], dtype=bool)
+    for name, (low, high) in limits.get("strokes", {}).items():
+        leg = rho[..., int(name[-1]) - 1]
+        broken |= (leg < low) | (leg > high)
+    for name, (low, high) in limits.get("passive", {}).items():
+        angle = theta[..., int(name[-1]) - 1]
+        if name.startswith("platform"):
+            angle = angle - alpha
+        broken |= np.mod(angle - low, 2 * np.pi) > np.mod(high - low, 2 * np.pi)
+    return broken
+
+
+@pytest.mark.parametrize("name", sorted(LIMITS))
+def test_limits_along_plans_agree_with_the_reference(name, planner, torus):
+    """Feasibility under a limit is torus connectivity (margins of at least
+    3e-3, as the planner keeps), and a returned plan, followed in small
+    steps, keeps the limit all along, where the scene-free plan breaks it."""
+    theta1, alpha, b, rho, pose, inside, sign = torus
+    limits = LIMITS[name]
+    margin = np.abs(G.margin(pose.reshape(-1, 3), rho.reshape(-1, 3))).reshape(sign.shape)
+    free = inside & (margin >= 3e-3) & ~reference_limits_broken(b, alpha, limits)
+    label = torus_components(free, sign)
+    ends = [torus_sample_of(PAPER_EXAMPLES[k], torus) for k in (0, 1)]
+    assert all(free[e] for e in ends)
+    scene_free = planner.plan(*EXAMPLE_1)
+    track = reference_track(scene_free.joints, scene_free.poses[0])
+    assert reference_limits_broken(np.array([torus_platform(p) for p in track]),
+                                   track[:, 2], limits).any()
+    world = planner.apply_scene(scene_from_dict({"limits": limits}))
+    if label[ends[0]] != label[ends[1]]:
+        with pytest.raises(InfeasiblePathError) as caught:
+            planner.plan(*EXAMPLE_1, world=world)
+        assert caught.value.reason == "blocked"
+        return
+    plan = planner.plan(*EXAMPLE_1, world=world)
+    track = reference_track(plan.joints, plan.poses[0])
+    assert abs(np.angle(np.exp(1j * (track[-1][2] - plan.poses[-1][2])))) < 1e-6
+    assert not reference_limits_broken(np.array([torus_platform(p) for p in track]),
+                                       track[:, 2], limits).any()
+
+
 def test_a_start_in_collision_is_refused_with_its_body(planner):
     start = EXAMPLE_1[0]
     pose = locate(planner.roadmap, start).pose
