@@ -15,7 +15,9 @@ from gwr_cases import PAPER_EXAMPLES
 from rpr3_gwr_core.exceptions import CollisionError, InfeasiblePathError
 from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY as G
 from rpr3_gwr_core.planning.locate import locate
+from rpr3_gwr_core.paper import rho1_slice
 from rpr3_gwr_core.planning.planner import Planner
+from rpr3_gwr_core.workspace.roadmap import build_roadmap
 from rpr3_gwr_core.world import (BodyModel, WorldIndex, configuration_collision,
                                  path_collisions, scene_from_dict)
 
@@ -415,6 +417,28 @@ def test_limits_along_plans_agree_with_the_reference(name, planner, torus):
     plan = planner.plan(*EXAMPLE_1, world=world)
     track = reference_track(plan.joints, plan.poses[0])
     assert abs(np.angle(np.exp(1j * (track[-1][2] - plan.poses[-1][2])))) < 1e-6
+    assert not reference_limits_broken(np.array([torus_platform(p) for p in track]),
+                                       track[:, 2], limits).any()
+
+
+def test_a_way_narrower_than_a_cell_is_found_on_a_finer_grid(planner, torus):
+    """The torus joins the first example within this range of platform
+    joint 2 only by a thin band along a fold, under a cell wide on the
+    paper's grid: there the answer is ``blocked``, saying so; on a grid of
+    half the step the plan exists, and the reference follows it within the
+    range."""
+    theta1, alpha, b, rho, pose, inside, sign = torus
+    limits = {"passive": {"platform2": [-0.5, 2.1]}}
+    margin = np.abs(G.margin(pose.reshape(-1, 3), rho.reshape(-1, 3))).reshape(sign.shape)
+    label = torus_components(
+        inside & (margin >= 3e-3) & ~reference_limits_broken(b, alpha, limits), sign)
+    ends = [torus_sample_of(PAPER_EXAMPLES[k], torus) for k in (0, 1)]
+    assert label[ends[0]] == label[ends[1]]
+    with pytest.raises(InfeasiblePathError, match="narrower than one of its cells"):
+        planner.plan(*EXAMPLE_1, world=planner.apply_scene(scene_from_dict({"limits": limits})))
+    finer = Planner(build_roadmap(G, rho1_slice(step=0.0625)))
+    plan = finer.plan(*EXAMPLE_1, world=finer.apply_scene(scene_from_dict({"limits": limits})))
+    track = reference_track(plan.joints, plan.poses[0])
     assert not reference_limits_broken(np.array([torus_platform(p) for p in track]),
                                        track[:, 2], limits).any()
 

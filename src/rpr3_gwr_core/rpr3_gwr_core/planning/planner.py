@@ -381,10 +381,16 @@ class Planner:
                     f"{'start' if answer.start_part < 0 else 'goal'} (an obstacle or a limit "
                     "lies within a cell of it)")
         if not answer.feasible:
+            # The scene is resolved cell by cell: where an obstacle or a limit
+            # leaves a band narrower than a cell (along a fold, where the
+            # joints barely move as the platform does), the grid sees no way
+            # that the platform has.
             error = InfeasiblePathError(
                 f"no path from patch {s.patch} to patch {g.patch}: "
                 f"{answer.reason.replace('_', ' ')}"
-                + (" by the scene" if answer.reason == "blocked" else ""))
+                + (" by the scene on this grid: a way narrower than one of its cells "
+                   "is not seen, a finer grid shows one if it exists"
+                   if answer.reason == "blocked" else ""))
             error.reason = answer.reason
             raise error
         paths = global_paths(self.global_index, s.patch, g.patch, options.weighted,
