@@ -109,6 +109,12 @@ class Mechanism(abc.ABC):
     max_solutions = 0
 
     @property
+    def angular_joints(self):
+        """Which actuated joints are angles [rad], one per joint (a
+        mechanism with revolute actuators marks them; none by default)."""
+        return (False,) * self.n_joints
+
+    @property
     def n_joints(self):
         """Number of actuated joints."""
         return len(self.joint_names)

@@ -96,6 +96,7 @@ class FiveBar(Mechanism):
     l2: float = 0.118
 
     joint_names = ("th1", "th2")
+    angular_joints = (True, True)
     pose_names = ("x", "y")
     angular = (False, False)
     mode_coordinate = 1

@@ -568,6 +568,7 @@ class ThreeRRR(_MovingBaseRPR):
     l2: float = 12.0
 
     joint_names = ("th1", "th2", "th3")
+    angular_joints = (True, True, True)
     _moving_points = ("elbows C_i (each may sit on either side of the line from its base "
                       "to its platform point)")
 
