@@ -26,17 +26,21 @@ def test_dk_on_the_paper_file_is_the_default_dk(legs, capsys):
     assert _run(["dk", "--mechanism", PAPER, *legs], capsys) == _run(["dk", *legs], capsys)
 
 
-@pytest.mark.parametrize("path, joints", [(FIVE_BAR, [0.5, 2.0]),
-                                          (THREE_RRR, [0.0, 1.2043, 2.2515])])
-def test_dk_on_a_file_gives_poses_of_those_joints(path, joints, capsys):
+@pytest.mark.parametrize("path, joints_deg", [(FIVE_BAR, [28.6, 114.6]),
+                                              (THREE_RRR, [0.0, 69.0, 129.0])])
+def test_dk_on_a_file_takes_and_gives_angles_in_degrees(path, joints_deg, capsys):
     mechanism = load_mechanism_file(path).mechanism
-    code, solutions = _run(["dk", "--mechanism", path, *map(str, joints)], capsys)
+    joints = np.radians(joints_deg)
+    code, solutions = _run(["dk", "--mechanism", path, *map(str, joints_deg)], capsys)
     assert code == 0 and solutions
+    labels = [f"{n}_deg" if a else n for n, a in zip(mechanism.pose_names, mechanism.angular)]
     for solution in solutions:
-        assert set(solution) == {*mechanism.pose_names, "aspect"}
-        pose = np.array([solution[name] for name in mechanism.pose_names])
-        assert np.max(np.abs(mechanism.residual(pose, np.array(joints)))) < 1e-6
-        assert solution["aspect"] == mechanism.aspect(pose, np.array(joints))
+        assert set(solution) == {*labels, "aspect", "signed_margin"}
+        pose = np.array([solution[label] for label in labels])
+        pose[list(mechanism.angular)] = np.radians(pose[list(mechanism.angular)])
+        assert np.max(np.abs(mechanism.residual(pose, joints))) < 1e-6
+        assert solution["aspect"] == mechanism.aspect(pose, joints)
+        assert solution["signed_margin"] == pytest.approx(mechanism.margin(pose, joints))
     assert len(solutions) == mechanism.solve(np.array([joints]))[0][0]
 
 
@@ -48,7 +52,7 @@ def test_cusps_on_the_paper_file_are_the_default_cusps(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, reason", [
-    (["dk", "--mechanism", FIVE_BAR, "1", "2", "3"], "dk takes the 2 joints TH1 TH2"),
+    (["dk", "--mechanism", FIVE_BAR, "1", "2", "3"], "dk takes the 2 joints TH1_DEG TH2_DEG"),
     (["dk", "17", "20"], "dk takes the 3 joints RHO1 RHO2 RHO3"),
     (["dk", "--mechanism", "/nonexistent.yaml", "1", "2"], "/nonexistent.yaml"),
     (["cusps", "--mechanism", FIVE_BAR], "the 5R has no cusp equations"),

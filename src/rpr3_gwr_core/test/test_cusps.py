@@ -49,7 +49,7 @@ def test_the_cli_prints_the_cusps(tmp_path, capsys):
     printed = json.loads(capsys.readouterr().out)
     np.testing.assert_allclose([[c["rho2"], c["rho3"]] for c in printed], CUSPS_AT_17,
                                atol=1e-4)
-    assert all(-math.pi < c["alpha"] <= math.pi and c["regions"] for c in printed)
+    assert all(-180 < c["alpha_deg"] <= 180 and c["regions"] for c in printed)
 
 
 def test_cusp_curves_run_through_the_cusps_of_every_slice(capsys):
@@ -63,7 +63,7 @@ def test_cusp_curves_run_through_the_cusps_of_every_slice(capsys):
         # Each curve moves a little from one slice to the next: a curve, not a jump.
         assert np.all(np.linalg.norm(np.diff(legs, axis=0), axis=1) < 2.0)
         for c in curve:
-            pose = np.array([c["x"], c["y"], c["alpha"]])
+            pose = np.array([c["x"], c["y"], math.radians(c["alpha_deg"])])
             assert abs(PAPER_GEOMETRY.margin(pose)) < 1e-6
 
 

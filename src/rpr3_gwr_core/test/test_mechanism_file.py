@@ -112,15 +112,17 @@ def test_the_command_line_builds_and_plans_on_a_file(tmp_path, capsys):
     code, summary = _run(["roadmap", "--mechanism", FIVE_BAR, *cache], capsys)
     assert code == 0 and summary["mechanism"]["kind"] == "5R"
     assert sorted(p["aspect"] for p in summary["patches"]) == [-1, 1] and not summary["gates"]
-    # Across the seam of th1: 0.083 rad, not a turn back.
-    code, plan = _run(["plan", "--mechanism", FIVE_BAR, *cache, "--start", "3.1", "2.5",
-                       str(PLUS_A), "--goal", "-3.1", "2.5", str(PLUS_B)], capsys)
+    # Across the seam of th1 (angles in degrees): 4.8 deg, not a turn back.
+    th = [str(math.degrees(v)) for v in (3.1, 2.5, -3.1)]
+    code, plan = _run(["plan", "--mechanism", FIVE_BAR, *cache, "--start", th[0], th[1],
+                       str(PLUS_A), "--goal", th[2], th[1], str(PLUS_B)], capsys)
     assert code == 0 and plan["feasible"] and plan["validation"]["ok"]
+    assert plan["columns"] == {"joints": ["th1_deg", "th2_deg"], "pose": ["x", "y"]}
     moved = [w["joints"] for w in plan["waypoints"]]
-    assert abs(moved[-1][0] - moved[0][0]) < 0.1
+    assert abs(moved[-1][0] - moved[0][0]) < 6
     # The five-bar's two assembly modes have opposite aspects: never a path.
-    code, refused = _run(["plan", "--mechanism", FIVE_BAR, *cache, "--start", "3.1", "2.5",
-                          str(PLUS_A), "--goal", "3.1", "2.5", str(MINUS_A)], capsys)
+    code, refused = _run(["plan", "--mechanism", FIVE_BAR, *cache, "--start", th[0], th[1],
+                          str(PLUS_A), "--goal", th[0], th[1], str(MINUS_A)], capsys)
     assert code == 1 and refused["reason"] == "other_aspect"
 
 
@@ -128,9 +130,10 @@ def test_the_command_line_plans_the_three_rrr_assembly_mode_change(tmp_path, cap
     """Two modes of th = (0, 1.2043, 2.2515) with one aspect, joined through
     the slice's two-solution region (the path itself is re-checked
     independently in test_rrr3)."""
+    th, alpha = [math.degrees(v) for v in (0, 1.2043, 2.2515)], (0.6526, 2.1165)
     code, plan = _run(["plan", "--mechanism", THREE_RRR, "--fix", "th1=0", "--cache-dir",
-                       str(tmp_path), "--start", "0", "1.2043", "2.2515", "0.6526", "--goal",
-                       "0", "1.2043", "2.2515", "2.1165"], capsys)
+                       str(tmp_path), "--start", *map(str, th), str(math.degrees(alpha[0])),
+                       "--goal", *map(str, th), str(math.degrees(alpha[1]))], capsys)
     assert code == 0 and plan["feasible"] and plan["validation"]["ok"]
     assert plan["start"]["patch"] != plan["goal"]["patch"]
 
@@ -141,7 +144,7 @@ def test_the_command_line_plans_the_three_rrr_assembly_mode_change(tmp_path, cap
     (["roadmap", "--fix", "rho1=17"], "--fix needs --mechanism"),
     (["roadmap", "--mechanism", FIVE_BAR, "--fix", "th1"], "is not NAME=VALUE"),
     (["plan", "--mechanism", FIVE_BAR, "--start", "1", "2", "--goal", "1", "2"],
-     "TH1 TH2 and the mode coordinate Y"),
+     "TH1_DEG TH2_DEG and the mode coordinate Y"),
     (["plan", "--mode-tol", "0.1", "--start", "1", "2", "3", "--goal", "1", "2", "3"],
      "--mode-tol needs --mechanism"),
     (["roadmap", "--mechanism", "/nonexistent.yaml"], "/nonexistent.yaml"),

@@ -83,6 +83,7 @@ from ..exceptions import InvalidInputError
 from ..planning.index import INDEX_TYPES, PlanningIndex
 from ..planning.planner import planning_index
 from ..workspace import build_roadmap, refine
+from ..workspace._progress import part
 from ..workspace.segmentation import TABLE_TYPES
 from .export import FIELD_TYPES, FORMAT, VERSION, roadmap_arrays, roadmap_from_arrays
 from .paths import default_cache_dir
@@ -164,7 +165,10 @@ def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=No
     cache_dir : str, optional
         Defaults to :func:`default_cache_dir`.
     progress : callable, optional
-        Passed to :func:`~rpr3_gwr_core.roadmap.build_roadmap`.
+        Called as ``progress(stage, fraction)`` (the stage's name, the
+        fraction of the work done) while the roadmap is built: through the
+        refinement of ``grid``, :func:`~rpr3_gwr_core.workspace.build_roadmap`
+        and the planning index; not on a load from the cache.
     refinement : int, optional
         Build on ``refine(mechanism, grid, refinement)`` (an adaptive grid)
         instead of ``grid`` itself.
@@ -233,15 +237,21 @@ def cached_planning(mechanism, grid, cache_dir=None, progress=None, refinement=N
                 pass
             return roadmap, index, True
     begin = time.perf_counter()
+    # Fractions of the work as the full 3-DOF roadmap's first build splits
+    # it: the planning index takes about a third.
+    built = 0.05 if refinement is not None else 0.0
     if refinement is not None:
-        grid = refine(mechanism, grid, refinement)
+        grid = refine(mechanism, grid, refinement, progress=part(progress, 0.0, built))
     refined = time.perf_counter() - begin
-    roadmap = build_roadmap(mechanism, grid, progress=progress)
+    roadmap = build_roadmap(mechanism, grid, progress=part(progress, built, 0.7))
     if refinement is not None:
         roadmap.timings["refine"] = refined
+    report = part(progress)
+    report("planning index", 0.7)
     begin = time.perf_counter()
     index = planning_index(roadmap)
     roadmap.timings["index"] = time.perf_counter() - begin
+    report("storing in the cache", 0.99)
     try:
         _store(directory, key, roadmap, index)
     except OSError as exc:
@@ -249,6 +259,7 @@ def cached_planning(mechanism, grid, cache_dir=None, progress=None, refinement=N
                       f"({exc})", CacheWarning, stacklevel=2)
     else:
         _evict(directory, path, max_bytes)
+    report("done", 1.0)
     return roadmap, index, False
 
 

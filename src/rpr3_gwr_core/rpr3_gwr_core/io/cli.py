@@ -3,7 +3,7 @@
 Subcommands::
 
     rpr3-gwr dk RHO1 RHO2 RHO3
-    rpr3-gwr dk --mechanism FILE.yaml JOINT [JOINT ...]
+    rpr3-gwr dk --mechanism FILE.yaml JOINT [JOINT ...]        (angular joints in degrees)
     rpr3-gwr roadmap [--rho1 17] [--rho2 MIN MAX] [--rho3 MIN MAX] [--step 0.125]
                      [--method components|rds] [-o FILE] [--gexf FILE]
                      [--field-figure FILE] [--roadmap-figure FILE]
@@ -14,17 +14,21 @@ Subcommands::
                   [--max-velocity V --max-acceleration A] [--time-limit SECONDS] [-o FILE]
     rpr3-gwr plan --full --start RHO1 RHO2 RHO3 ALPHA_DEG --goal RHO1 RHO2 RHO3 ALPHA_DEG
                   [the options above]
+    rpr3-gwr plan --mechanism FILE.yaml [--fix NAME=VALUE ...] --start JOINT ... MODE
+                  --goal JOINT ... MODE [--mode-tol TOL] [the options above]
     rpr3-gwr plot PLAN.json [-o FIGURE]
     rpr3-gwr cusps [--rho1 17] [--cache-dir DIR]
     rpr3-gwr cusps --mechanism FILE.yaml --fix NAME=VALUE [...] [--cache-dir DIR]
     rpr3-gwr cusps --trace RHO1_MIN RHO1_MAX RHO1_STEP [--step 0.25]
 
-Results go to stdout as JSON; bad arguments exit with code 2 and one line on
+Angles are in degrees, in the arguments and in the answers (:data:`ANGLES`);
+results go to stdout as JSON; bad arguments exit with code 2 and one line on
 stderr (legs longer than 1e6 length units, a grid over
 :data:`~rpr3_gwr_core.workspace.grid.MAX_GRID_CELLS` cells or one that cannot
 give a roadmap, a file that cannot be read or written); a plan that cannot be
 made prints an ``error`` object with a code and a message and exits with 1;
-progress is shown on stderr when it is a terminal.
+builds that take seconds show their progress on stderr (a bar on a terminal,
+log lines otherwise), never on stdout.
 ``--mechanism FILE.yaml`` names a robot of one's own
 (:mod:`~rpr3_gwr_core.io.mechanism_file`) instead of the paper's 3-RPR;
 ``cusps`` takes it when it has cusp equations.
@@ -43,7 +47,15 @@ import sys
 from ..exceptions import GWRError
 from .paths import default_cache_dir
 
-__all__ = ["main"]
+__all__ = ["main", "ANGLES"]
+
+ANGLES = ("Angles are in degrees [deg], in the arguments and in the JSON answer (its keys "
+          "that hold angles end in _deg; 'columns' names the entries of its joint and pose "
+          "lists); lengths in the mechanism's length unit.  The 'mechanism', 'grid' and "
+          "'scene' documents it echoes keep the core's units (radians), as files and "
+          "messages carry them.")
+"""The unit rule of every command (their ``--help``): the core and the ROS
+interfaces work in radians, the command line converts."""
 
 # Longest leg the tool takes [length unit].  The direct kinematics weighs the
 # squared legs against the geometry's tens of units, so the leg residual of
@@ -96,8 +108,8 @@ def _mechanism_options(command):
                               "file's box of joints instead of the paper's 3-RPR slice")
     command.add_argument("--fix", type=_fixed_joint, action="append", default=[],
                          metavar="NAME=VALUE",
-                         help="with --mechanism: a joint held fixed (repeatable); the others "
-                              "are the roadmap's axes")
+                         help="with --mechanism: a joint held fixed (repeatable) [length "
+                              "unit, deg for an angle]; the others are the roadmap's axes")
 
 
 def _figure(path):
@@ -114,26 +126,36 @@ def _figure(path):
 
 
 def _parser():
-    parser = _Parser(prog="rpr3-gwr", description="Global workspace roadmap of the 3-RPR.")
+    parser = _Parser(prog="rpr3-gwr", epilog=ANGLES,
+                     description="Global workspace roadmap of a planar parallel mechanism "
+                                 "(the paper's 3-RPR unless --mechanism names another).")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    dk = sub.add_parser("dk", help="all direct-kinematic solutions of (rho1, rho2, rho3), or "
-                                   "of the joints of --mechanism")
+
+    def command(name, text):
+        return sub.add_parser(name, help=text, description=text, epilog=ANGLES)
+
+    dk = command("dk", "all direct-kinematic solutions of (rho1, rho2, rho3), or of the joints "
+                       "of --mechanism: each pose [length unit, deg], its aspect and its "
+                       "signed margin")
     dk.add_argument("joints", type=_leg, nargs="+", metavar="JOINT",
-                    help="RHO1 RHO2 RHO3, or with --mechanism every joint of the file "
-                         "(angles in radians)")
+                    help="RHO1 RHO2 RHO3 [length unit], or with --mechanism every joint of "
+                         "the file [length unit, deg for an angle]")
     dk.add_argument("--mechanism", metavar="FILE.yaml",
                     help="a robot of your own (config/*.yaml) instead of the paper's 3-RPR")
-    roadmap = sub.add_parser("roadmap", help="build the roadmap and print a JSON summary")
+    roadmap = command("roadmap", "build the roadmap and print a JSON summary (its cusps' "
+                                 "angles [deg])")
     # The paper's slice; defaults filled in by the command, so that a
     # --mechanism run can refuse them.
-    roadmap.add_argument("--rho1", type=_leg, help="default 17")
+    roadmap.add_argument("--rho1", type=_leg, help="[length unit] default 17")
     for leg in ("--rho2", "--rho3"):
         roadmap.add_argument(leg, type=_leg, nargs=2, metavar=("MIN", "MAX"),
-                             help="default 0 50")
-    roadmap.add_argument("--step", type=_finite, help="default 0.125")
+                             help="[length unit] default 0 50")
+    roadmap.add_argument("--step", type=_finite, help="[length unit] default 0.125")
     _mechanism_options(roadmap)
     roadmap.add_argument("--method", choices=("components", "rds"), default="components")
-    roadmap.add_argument("-o", "--output", help="write the full roadmap JSON (with field) here")
+    roadmap.add_argument("-o", "--output",
+                         help="write the full roadmap JSON (with field) here, in the core's "
+                              "units (radians)")
     roadmap.add_argument("--gexf", help="write the roadmap graph as GEXF here")
     roadmap.add_argument("--field-figure", type=_figure,
                          help="write the n-solution field figure here (PNG, PDF, SVG)")
@@ -144,34 +166,40 @@ def _parser():
     roadmap.add_argument("--slice-figure", type=_figure,
                          help="with --full: draw the regions of a slice here")
     roadmap.add_argument("--slice-rho1", type=_leg, default=17.0,
-                         help="with --full: rho1 of the slice figure")
+                         help="with --full: rho1 of the slice figure [length unit]")
     roadmap.add_argument("--cache-dir", default=default_cache_dir())
     roadmap.add_argument("--scene", metavar="FILE.yaml",
                          help="a scene of obstacles and limits: the summary counts the parts "
                               "it leaves, the field figure hatches what it blocks")
-    plan = sub.add_parser("plan", help="plan a singularity-free path between two configurations")
-    plan.add_argument("--rho1", type=_leg, help="default 17")
+    plan = command("plan", "plan a singularity-free path between two configurations, each "
+                           "its joints and the mode coordinate [length unit, deg]; the "
+                           "answer gives the signed_margin of its ends (its sign the aspect) "
+                           "and the path's min_abs_margin")
+    plan.add_argument("--rho1", type=_leg, help="[length unit] default 17")
     _mechanism_options(plan)
     plan.add_argument("--full", action="store_true",
                       help="plan on the full 3-DOF roadmap: --start and --goal give rho1 first")
     plan.add_argument("--start", type=_finite, nargs="+", required=True,
                       metavar="[RHO1] RHO2 RHO3 ALPHA_DEG",
-                      help="with --mechanism: every joint, then the mode coordinate "
-                           "(angles in radians)")
+                      help="the legs [length unit] (RHO1 with --full) and alpha [deg]; with "
+                           "--mechanism every joint, then the mode coordinate [length unit, "
+                           "deg for an angle]")
     plan.add_argument("--goal", type=_finite, nargs="+", required=True,
-                      metavar="[RHO1] RHO2 RHO3 ALPHA_DEG")
+                      metavar="[RHO1] RHO2 RHO3 ALPHA_DEG", help="as --start")
     plan.add_argument("--smooth", action="store_true", help="shortcut and round the path")
     plan.add_argument("--weighted", action="store_true", help="rank global paths by weighted cost")
     plan.add_argument("--feasibility-only", action="store_true",
                       help="answer from the roadmap alone, without a trajectory")
-    plan.add_argument("--max-velocity", type=_finite, help="joint speed limit [length unit/s]")
+    plan.add_argument("--max-velocity", type=_finite,
+                      help="joint speed limit [length unit/s, deg/s for angular joints]")
     plan.add_argument("--max-acceleration", type=_finite,
-                      help="joint acceleration limit [length unit/s^2]")
+                      help="joint acceleration limit [length unit/s^2, deg/s^2 for angular "
+                           "joints]")
     plan.add_argument("--alpha-tol-deg", type=_finite, default=1.0,
                       help="tolerance on the start and goal orientations [deg]")
     plan.add_argument("--mode-tol", type=_finite,
-                      help="with --mechanism: tolerance on the mode coordinate [its unit, "
-                           "radians for an angle]")
+                      help="with --mechanism: tolerance on the mode coordinate [length "
+                           "unit, deg for an angle]")
     plan.add_argument("--time-limit", type=_duration, metavar="SECONDS",
                       help="stop planning after this long (the roadmap loaded): the valid path "
                            "found by then, or a TIMEOUT error")
@@ -181,15 +209,17 @@ def _parser():
     plan.add_argument("-o", "--output", help="also write the JSON here")
     plan.add_argument("--cache-dir", help="roadmap cache (default: %(default)s)",
                       default=default_cache_dir())
-    cusps = sub.add_parser("cusps", help="the cusp points of the singular curve at rho1")
-    cusps.add_argument("--rho1", type=_leg, help="default 17")
+    cusps = command("cusps", "the cusp points of the singular curve at rho1: joints and pose "
+                             "[length unit, deg] and the regions around each")
+    cusps.add_argument("--rho1", type=_leg, help="[length unit] default 17")
     _mechanism_options(cusps)
     cusps.add_argument("--cache-dir", default=default_cache_dir())
     cusps.add_argument("--trace", type=_finite, nargs=3, metavar=("MIN", "MAX", "STEP"),
-                       help="trace the cusp curves across rho1 (slices at this many values)")
+                       help="trace the cusp curves across rho1 [length unit]: a slice at "
+                            "each value from MIN to MAX by STEP")
     cusps.add_argument("--step", type=_finite, help="with --trace: grid step of each slice "
-                                                    "(default 0.25)")
-    plot = sub.add_parser("plot", help="draw a plan written by 'rpr3-gwr plan'")
+                                                    "[length unit] (default 0.25)")
+    plot = command("plot", "draw a plan written by 'rpr3-gwr plan'")
     plot.add_argument("plan_file", metavar="PLAN.json")
     plot.add_argument("-o", "--output", type=_figure,
                       help="figure file (default: PLAN.png beside the plan)")

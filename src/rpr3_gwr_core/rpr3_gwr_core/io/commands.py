@@ -2,11 +2,20 @@
 
 Each command imports what only it needs when it runs (the planner, the cache,
 the cusps, figures): a fresh process pays for its own command alone.
+
+Angles are degrees here and radians in the core: the arguments are converted
+on the way in, the answers on the way out, for the joints and pose
+coordinates the mechanism marks as angles (``Mechanism.angular_joints`` and
+``Mechanism.angular``).  A key holding an angle ends in ``_deg``; a list of
+joints or pose coordinates is converted entry by entry, its entries named in
+the answer's ``columns``.  The documents the core reads back (``mechanism``,
+``grid``, ``scene``, the roadmap JSON of ``-o``) keep the core's units.
 """
 
 import json
 import math
 import os
+import shutil
 import sys
 import time
 
@@ -16,6 +25,7 @@ from ..exceptions import GWRError, InvalidInputError
 from ..mechanisms import Mechanism, mechanism_from_dict
 from ..paper import FULL_BASE_GRID, FULL_REFINEMENT, PAPER_GEOMETRY, rho1_slice
 from ..workspace import Grid, build_roadmap
+from ..workspace._progress import part
 from ..workspace.grid import check_roadmap_grid
 from .cli import MAX_LEG
 
@@ -27,28 +37,119 @@ _TRACE_STEP = 0.25
 
 def run(args):
     """Run the parsed command: ``(JSON-able result, exit code)``."""
-    commands = {"dk": lambda a: (_dk(a), 0), "roadmap": lambda a: (_roadmap(a), 0),
-                "cusps": lambda a: (_cusps(a), 0), "plan": _plan, "plot": _plot}
-    return commands[args.command](args)
+    commands = {"dk": _dk, "roadmap": _roadmap, "cusps": _cusps, "plan": _plan, "plot": _plot}
+    progress = _Progress(sys.stderr)
+    try:
+        answer = commands[args.command](args, progress)
+    finally:
+        progress.close()
+    # Only a plan can fail without an error: it answers with its exit code.
+    return answer if args.command == "plan" else (answer, 0)
 
 
 class _Progress:
-    """Shows stages on a terminal once a build has taken more than a second."""
+    """The core's ``progress(stage, fraction)`` callback of one command, shown
+    on ``stream`` once the command has run for :attr:`DELAY` seconds: a bar
+    redrawn in place on a terminal, else a line such as ``rpr3-gwr: [ 40%]
+    stage (3.1 s)`` every :attr:`LOG_EVERY` seconds and at the end, which a
+    log keeps and a reader tells from the error line.  Meant for stderr:
+    stdout is the answer's."""
+
+    BAR = 20
+    DELAY = 2.0
+    LOG_EVERY = 2.0
 
     def __init__(self, stream):
         self.stream = stream
         self.start = time.perf_counter()
-        self.enabled = stream.isatty()
+        self.terminal = stream.isatty()
+        self.logged = -math.inf
+        self.open_line = False
 
     def __call__(self, stage, fraction):
         elapsed = time.perf_counter() - self.start
-        if self.enabled and elapsed > 1.0:
-            end = "\n" if fraction >= 1.0 else ""
-            self.stream.write(f"\r\x1b[K[{fraction:4.0%}] {stage} ({elapsed:.1f} s)" + end)
+        if elapsed < self.DELAY:
+            return
+        if self.terminal:
+            filled = int(self.BAR * min(max(fraction, 0.0), 1.0))
+            line = (f"[{'#' * filled}{'.' * (self.BAR - filled)}] {fraction:4.0%} {stage} "
+                    f"({elapsed:.1f} s)")
+            # A line wider than the terminal would wrap, and \r go back one row only.
+            width = shutil.get_terminal_size((80, 24)).columns - 1
+            self.stream.write(f"\r\x1b[K{line[:width]}")
+            self.open_line = True
+            if fraction >= 1.0:
+                self.close()
+        elif fraction >= 1.0 or elapsed - self.logged >= self.LOG_EVERY:
+            self.stream.write(f"rpr3-gwr: [{fraction:4.0%}] {stage} ({elapsed:.1f} s)\n")
+            self.logged = elapsed
+        self.stream.flush()
+
+    def close(self):
+        """End the bar's line, so that what follows starts on a line of its own."""
+        if self.open_line:
+            self.stream.write("\n")
             self.stream.flush()
+            self.open_line = False
 
 
-def _cusps(args):
+# -- angles: degrees on the command line, radians in the core ----------------------------
+
+def _angles(mechanism):
+    """Which joints and which pose coordinates are angles: two tuples of bool."""
+    return tuple(mechanism.angular_joints), tuple(mechanism.angular)
+
+
+def _labels(names, angles):
+    """The names of values shown in degrees where they are angles: ``alpha_deg``."""
+    return [f"{name}_deg" if angle else name for name, angle in zip(names, angles)]
+
+
+def _shown(values, angles):
+    """Core values [rad] as the command line shows them [deg], a list of float."""
+    return [math.degrees(v) if angle else float(v) for v, angle in zip(values, angles)]
+
+
+def _taken(values, angles):
+    """Command-line values [deg] as the core takes them [rad], a tuple of float."""
+    return tuple(math.radians(v) if angle else float(v) for v, angle in zip(values, angles))
+
+
+def _named(names, values, angles):
+    """``{label: shown value}`` of some joints or pose coordinates."""
+    return dict(zip(_labels(names, angles), _shown(values, angles)))
+
+
+def _in_degrees(entry, mechanism):
+    """A dict of the core's with joints and pose coordinates by name
+    (``Cusp.to_dict``) as the command line shows it, in order."""
+    joint_angles, pose_angles = _angles(mechanism)
+    names = (*mechanism.joint_names, *mechanism.pose_names)
+    angle = dict(zip(names, (*joint_angles, *pose_angles)))
+    return {f"{key}_deg" if angle.get(key) else key:
+            math.degrees(value) if angle.get(key) else value for key, value in entry.items()}
+
+
+def _columns(mechanism):
+    """What each entry of the answers' joint and pose lists is."""
+    joint_angles, pose_angles = _angles(mechanism)
+    return {"joints": _labels(mechanism.joint_names, joint_angles),
+            "pose": _labels(mechanism.pose_names, pose_angles)}
+
+
+def _joint_rate(mechanism, value, name):
+    """A joint speed or acceleration limit [length unit or deg per s, s^2] in
+    the core's joint unit: one limit binds every joint, so they share a unit."""
+    joint_angles, _ = _angles(mechanism)
+    if value is None or not any(joint_angles):
+        return value
+    if not all(joint_angles):
+        raise InvalidInputError(f"--{name}: the {mechanism.kind}'s joints are lengths and "
+                                "angles, which one limit cannot bound")
+    return math.radians(value)
+
+
+def _cusps(args, progress):
     from ..workspace.cusps import cusp_curves, find_cusps
     from .cache import cached_roadmap
 
@@ -64,10 +165,14 @@ def _cusps(args):
                                     "giving at most 1000 slices")
         values = low + step * np.arange(int(math.floor((high - low) / step + 1e-9)) + 1)
         slice_step = _TRACE_STEP if args.step is None else args.step
-        slices = [build_roadmap(PAPER_GEOMETRY, rho1_slice(float(v), step=slice_step))
-                  for v in values]
-        return {"curves": [[c.to_dict(PAPER_GEOMETRY) for c in curve]
-                           for curve in cusp_curves(slices)]}
+        # The slices' builds take most of the time, the curves through them the rest.
+        slices = [build_roadmap(PAPER_GEOMETRY, rho1_slice(float(v), step=slice_step),
+                                progress=part(progress, 0.8 * k / len(values),
+                                              0.8 * (k + 1) / len(values), f"rho1 = {v:g}"))
+                  for k, v in enumerate(values)]
+        curves = cusp_curves(slices, progress=part(progress, 0.8, 1.0))
+        return {"curves": [[_in_degrees(c.to_dict(PAPER_GEOMETRY), PAPER_GEOMETRY)
+                            for c in curve] for curve in curves]}
     if args.mechanism is None:
         mechanism, grid = PAPER_GEOMETRY, rho1_slice(args.rho1)
     else:
@@ -81,15 +186,15 @@ def _cusps(args):
         if grid.ndim != 2:
             raise InvalidInputError(f"cusps are points of 2-D slices: --fix all joints but "
                                     f"two (the grid has {grid.ndim} axes)")
-    roadmap, _ = cached_roadmap(mechanism, grid, args.cache_dir, _Progress(sys.stderr))
+    roadmap, _ = cached_roadmap(mechanism, grid, args.cache_dir, progress)
     try:
         cusps = find_cusps(roadmap)
     except NotImplementedError as exc:
         raise InvalidInputError(f"{exc}: 'cusps' takes mechanisms with cusp equations") from None
-    return [c.to_dict(mechanism) for c in cusps]
+    return [_in_degrees(c.to_dict(mechanism), mechanism) for c in cusps]
 
 
-def _dk(args):
+def _dk(args, progress):
     if args.mechanism is not None:
         from .mechanism_file import load_mechanism_file
 
@@ -97,28 +202,33 @@ def _dk(args):
     else:
         mechanism = PAPER_GEOMETRY
     names = mechanism.joint_names
+    joint_angles, pose_angles = _angles(mechanism)
     if len(args.joints) != len(names):
         raise InvalidInputError(f"dk takes the {len(names)} joints "
-                                f"{' '.join(n.upper() for n in names)} (all required), "
-                                f"got {len(args.joints)}")
-    joints = np.array([args.joints], dtype=float)
+                                f"{' '.join(_labels(names, joint_angles)).upper()} (all "
+                                f"required), got {len(args.joints)}")
+    joints = np.array([_taken(args.joints, joint_angles)])
     mechanism.check_joints(joints)
     count, poses = mechanism.solve(joints)
     poses = poses[0, :count[0]]
-    signs = mechanism.aspect(poses, np.repeat(joints, len(poses), axis=0)) if len(poses) else []
-    return [{**{name: float(v) for name, v in zip(mechanism.pose_names, p)}, "aspect": int(s)}
-            for p, s in zip(poses, signs)]
+    if not len(poses):
+        return []
+    joints = np.repeat(joints, len(poses), axis=0)
+    return [{**_named(mechanism.pose_names, p, pose_angles), "aspect": int(a),
+             "signed_margin": float(m)}
+            for p, a, m in zip(poses, mechanism.aspect(poses, joints),
+                               mechanism.margin(poses, joints))]
 
 
-def _full_roadmap(cache_dir):
+def _full_roadmap(cache_dir, progress):
     """The full 3-DOF roadmap, its planning index, and whether they came from the cache."""
     from .cache import cached_planning
 
-    return cached_planning(PAPER_GEOMETRY, FULL_BASE_GRID, cache_dir, _Progress(sys.stderr),
+    return cached_planning(PAPER_GEOMETRY, FULL_BASE_GRID, cache_dir, progress,
                            refinement=FULL_REFINEMENT)
 
 
-def _roadmap(args):
+def _roadmap(args, progress):
     from .export import roadmap_summary, roadmap_to_gexf, roadmap_to_json
 
     _paper_slice_options(args, ("rho1", "rho2", "rho3", "step"))
@@ -129,28 +239,31 @@ def _roadmap(args):
 
         described, grid = _file_roadmap(args)
         base, refinement = roadmap_grid(grid)
-        roadmap, hit = cached_roadmap(described.mechanism, base, args.cache_dir,
-                                      _Progress(sys.stderr), refinement=refinement)
+        roadmap, hit = cached_roadmap(described.mechanism, base, args.cache_dir, progress,
+                                      refinement=refinement)
         if args.slice_figure:
             raise InvalidInputError("--slice-figure needs --full")
     elif args.full:
         if args.field_figure:
             raise InvalidInputError("--field-figure draws 2-D grids: with --full use "
                                     "--slice-figure")
-        roadmap, _, hit = _full_roadmap(args.cache_dir)
+        roadmap, _, hit = _full_roadmap(args.cache_dir, progress)
     else:
         if args.slice_figure:
             raise InvalidInputError("--slice-figure needs --full")
         grid = rho1_slice(args.rho1, tuple(args.rho2), tuple(args.rho3), args.step)
         check_roadmap_grid(PAPER_GEOMETRY, grid)
         roadmap, hit = build_roadmap(PAPER_GEOMETRY, grid, method=args.method,
-                                     progress=_Progress(sys.stderr)), False
+                                     progress=progress), False
     summary = roadmap_summary(roadmap)
+    summary["cusps"] = [_in_degrees(c, roadmap.mechanism) for c in summary["cusps"]]
     world = None
     if args.scene is not None:
         from ..planning import Planner
 
+        progress("the scene's blocked solutions", 0.0)
         world = _applied(Planner(roadmap), _load_scene(args.scene), args)
+        progress("the scene's blocked solutions", 1.0)
         solutions = roadmap.segmentation.patch > 0
         summary["scene"] = {"file": args.scene, "parts": world.n_parts,
                             "blocked_solutions": int((solutions & ~world.free).sum()),
@@ -211,12 +324,15 @@ def _paper_slice_options(args, names):
 
 def _file_roadmap(args):
     """The :class:`~.mechanism_file.MechanismFile` of ``--mechanism`` and the
-    grid of its box and ``--fix``."""
+    grid of its box and ``--fix`` (angles in degrees)."""
     from .mechanism_file import load_mechanism_file
 
     described = load_mechanism_file(args.mechanism)
-    grid = described.grid(dict(args.fix))
-    check_roadmap_grid(described.mechanism, grid)
+    mechanism = described.mechanism
+    angle = dict(zip(mechanism.joint_names, _angles(mechanism)[0]))
+    grid = described.grid({name: math.radians(value) if angle.get(name) else value
+                           for name, value in args.fix})
+    check_roadmap_grid(mechanism, grid)
     return described, grid
 
 
@@ -247,13 +363,12 @@ def _applied(planner, scene, args):
         raise InvalidInputError(f"{args.scene}: {exc}") from None
 
 
-def _plan(args):
-    from ..planning import PlanOptions
+def _plan(args, progress):
     from .cache import cached_planning
 
     _paper_slice_options(args, ("rho1",))
     if args.mechanism is not None:
-        return _plan_on_file(args)
+        return _plan_on_file(args, progress)
     if args.mode_tol is not None:
         raise InvalidInputError("--mode-tol needs --mechanism; the paper's 3-RPR takes "
                                 "--alpha-tol-deg")
@@ -263,56 +378,79 @@ def _plan(args):
             raise InvalidInputError(
                 f"--{name} takes {'RHO1 ' if args.full else ''}RHO2 RHO3 ALPHA_DEG"
                 f"{'' if args.full else ' (rho1 is --rho1; --full plans with rho1 free)'}")
-    options = PlanOptions(smooth=args.smooth, weighted=args.weighted,
-                          feasibility_only=args.feasibility_only,
-                          max_velocity=args.max_velocity, max_acceleration=args.max_acceleration,
-                          mode_tol=math.radians(args.alpha_tol_deg))
+    options = _options(args, PAPER_GEOMETRY, math.radians(args.alpha_tol_deg))
     if args.full:
-        roadmap, index, _ = _full_roadmap(args.cache_dir)
-        start, goal = tuple(args.start), tuple(args.goal)
+        roadmap, index, _ = _full_roadmap(args.cache_dir, progress)
+        start, goal = args.start, args.goal
         roadmap_doc = {"mechanism": PAPER_GEOMETRY.to_dict(), "full": True}
     else:
         grid = rho1_slice(args.rho1)
-        roadmap, index, _ = cached_planning(PAPER_GEOMETRY, grid, args.cache_dir,
-                                            _Progress(sys.stderr))
+        roadmap, index, _ = cached_planning(PAPER_GEOMETRY, grid, args.cache_dir, progress)
         start, goal = (args.rho1, *args.start), (args.rho1, *args.goal)
         roadmap_doc = {"mechanism": PAPER_GEOMETRY.to_dict(), "grid": grid.to_dict()}
-    start = (*start[:3], math.radians(start[3]))
-    goal = (*goal[:3], math.radians(goal[3]))
-    return _answer(args, roadmap, index, start, goal, options, roadmap_doc)
+    return _answer(args, progress, roadmap, index, start, goal, options, roadmap_doc)
 
 
-def _plan_on_file(args):
-    from ..planning import PlanOptions
+def _plan_on_file(args, progress):
     from .cache import cached_planning
     from .mechanism_file import roadmap_grid
 
     described, grid = _file_roadmap(args)
     mechanism = described.mechanism
-    start, goal = tuple(args.start), tuple(args.goal)
-    for name, values in (("start", start), ("goal", goal)):
-        if len(values) != mechanism.n_joints + 1:
+    labels = _request_labels(mechanism)
+    for name in ("start", "goal"):
+        if len(getattr(args, name)) != len(labels):
             raise InvalidInputError(
-                f"--{name} takes {' '.join(n.upper() for n in mechanism.joint_names)} and the "
-                f"mode coordinate {mechanism.pose_names[mechanism.mode_coordinate].upper()} "
-                "(angles in radians)")
-    tolerance = {} if args.mode_tol is None else {"mode_tol": args.mode_tol}
-    options = PlanOptions(smooth=args.smooth, weighted=args.weighted,
-                          feasibility_only=args.feasibility_only,
-                          max_velocity=args.max_velocity, max_acceleration=args.max_acceleration,
-                          **tolerance)
+                f"--{name} takes {' '.join(labels[:-1]).upper()} and the mode coordinate "
+                f"{labels[-1].upper()} (angles in degrees)")
+    tolerance = args.mode_tol
+    if tolerance is not None and _request_angles(mechanism)[-1]:
+        tolerance = math.radians(tolerance)
+    options = _options(args, mechanism, tolerance)
     base, refinement = roadmap_grid(grid)
-    roadmap, index, _ = cached_planning(mechanism, base, args.cache_dir, _Progress(sys.stderr),
+    roadmap, index, _ = cached_planning(mechanism, base, args.cache_dir, progress,
                                         refinement=refinement)
     roadmap_doc = {"mechanism": mechanism.to_dict(), "grid": grid.to_dict()}
-    return _answer(args, roadmap, index, start, goal, options, roadmap_doc)
+    return _answer(args, progress, roadmap, index, args.start, args.goal, options, roadmap_doc)
 
 
-def _answer(args, roadmap, index, start, goal, options, roadmap_doc):
-    """The plan's JSON and exit code (1 when there is no plan)."""
+def _options(args, mechanism, mode_tol):
+    """The :class:`~rpr3_gwr_core.planning.PlanOptions` of the arguments, the
+    mode tolerance in the core's unit (None: the default)."""
+    from ..planning import PlanOptions
+
+    tolerance = {} if mode_tol is None else {"mode_tol": mode_tol}
+    return PlanOptions(smooth=args.smooth, weighted=args.weighted,
+                       feasibility_only=args.feasibility_only,
+                       max_velocity=_joint_rate(mechanism, args.max_velocity, "max-velocity"),
+                       max_acceleration=_joint_rate(mechanism, args.max_acceleration,
+                                                    "max-acceleration"),
+                       **tolerance)
+
+
+def _request_angles(mechanism):
+    """Which values of a request (every joint, then the mode coordinate) are angles."""
+    joint_angles, pose_angles = _angles(mechanism)
+    return (*joint_angles, pose_angles[mechanism.mode_coordinate])
+
+
+def _request_labels(mechanism):
+    """The labels of a request's values: ``rho1 rho2 rho3 alpha_deg``."""
+    return _labels((*mechanism.joint_names, mechanism.pose_names[mechanism.mode_coordinate]),
+                   _request_angles(mechanism))
+
+
+def _answer(args, progress, roadmap, index, start, goal, options, roadmap_doc):
+    """The plan's JSON and exit code (1 when there is no plan); ``start`` and
+    ``goal`` as given (angles in degrees)."""
     from ..planning import NEVER, Planner, Termination
 
-    header = {"roadmap": roadmap_doc, "request": {"start": list(start), "goal": list(goal)}}
+    mechanism = roadmap.mechanism
+    angles = _request_angles(mechanism)
+    labels = _request_labels(mechanism)
+    header = {"roadmap": roadmap_doc, "columns": _columns(mechanism),
+              "request": {"start": dict(zip(labels, map(float, start))),
+                          "goal": dict(zip(labels, map(float, goal)))}}
     scene = None if args.scene is None else _load_scene(args.scene)
     if scene is not None:
         header["scene"] = scene.to_dict()
@@ -322,8 +460,11 @@ def _answer(args, roadmap, index, start, goal, options, roadmap_doc):
     world = None if scene is None else _applied(planner, scene, args)
     try:
         termination = NEVER if args.time_limit is None else Termination.after(args.time_limit)
-        plan = planner.plan(start, goal, options, termination, world)
-        result = dict(header, **plan.to_dict())
+        progress("planning", 0.0)
+        plan = planner.plan(_taken(start, angles), _taken(goal, angles), options, termination,
+                            world)
+        progress("planning", 1.0)
+        result = dict(header, **_plan_shown(plan.to_dict(), mechanism))
         code = 0
     except GWRError as exc:
         result = dict(header, feasible=False, reason=getattr(exc, "reason", exc.code.lower()),
@@ -335,9 +476,36 @@ def _answer(args, roadmap, index, start, goal, options, roadmap_doc):
     return result, code
 
 
+def _plan_shown(plan, mechanism):
+    """:meth:`Plan.to_dict` as the command line shows it: angles in degrees
+    (the joint lists, velocities and accelerations per joint, the pose lists
+    per coordinate; ``columns`` names them), margins named signed or not."""
+    joint_angles, pose_angles = _angles(mechanism)
+
+    def configuration(entry):
+        return dict(entry, joints=_shown(entry["joints"], joint_angles),
+                    pose=_shown(entry["pose"], pose_angles))
+
+    out = dict(plan, waypoints=[configuration(w) for w in plan["waypoints"]])
+    for end in ("start", "goal"):
+        if out.get(end) is not None:
+            location = configuration(out[end])
+            location["signed_margin"] = location.pop("margin")
+            out[end] = location
+    for rate in ("velocities", "accelerations"):
+        if rate in out:
+            out[rate] = [_shown(v, joint_angles) for v in out[rate]]
+    if out.get("validation") is not None:
+        validation = dict(out["validation"])
+        validation["min_abs_margin"] = validation.pop("min_margin")
+        out["validation"] = validation
+    return out
+
+
 def _read_plan(path):
-    """The mechanism, grid and plan of a file written by ``plan``; what a
-    figure reads of the plan is checked (else ``InvalidInputError``)."""
+    """The mechanism, grid and plan of a file written by ``plan``, its
+    waypoints in the core's units (radians); what a figure reads of the plan
+    is checked (else ``InvalidInputError``)."""
     try:
         with open(path, encoding="utf-8") as stream:
             plan = json.load(stream)
@@ -348,6 +516,8 @@ def _read_plan(path):
         grid = Grid.from_dict(plan["roadmap"]["grid"])
         if "error" in plan or not plan.get("waypoints"):
             raise InvalidInputError(f"{path} holds no trajectory to draw")
+        if plan.get("columns") != _columns(mechanism):
+            raise ValueError(f"its columns are not {_columns(mechanism)}")
         for name, size in (("joints", mechanism.n_joints), ("pose", mechanism.pose_size)):
             values = np.array([w[name] for w in plan["waypoints"]], dtype=float)
             if values.shape[1:] != (size,) or not np.all(np.isfinite(values)):
@@ -364,16 +534,20 @@ def _read_plan(path):
     if max([a.high for a in grid.axes] + [v for _, v in grid.fixed]) > MAX_LEG:
         raise InvalidInputError(f"the grid of {path} is out of range: legs are at most "
                                 f"{MAX_LEG:g} length units")
+    joint_angles, pose_angles = _angles(mechanism)
+    plan["waypoints"] = [dict(w, joints=list(_taken(w["joints"], joint_angles)),
+                              pose=list(_taken(w["pose"], pose_angles)))
+                         for w in plan["waypoints"]]
     return mechanism, grid, plan
 
 
-def _plot(args):
+def _plot(args, progress):
     from .cache import cached_roadmap
     from .figures import plan_figure
 
     mechanism, grid, plan = _read_plan(args.plan_file)
     check_roadmap_grid(mechanism, grid)
-    roadmap, _ = cached_roadmap(mechanism, grid, args.cache_dir, _Progress(sys.stderr))
+    roadmap, _ = cached_roadmap(mechanism, grid, args.cache_dir, progress)
     output = args.output or os.path.splitext(args.plan_file)[0] + ".png"
     _save(output, plan_figure(roadmap, plan), dpi=110)
-    return {"figure": output}, 0
+    return {"figure": output}

@@ -29,7 +29,7 @@ UNIFORM_CELLS = 1_000_000
 """Largest box of all the joints built as a uniform grid [cells]."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class MechanismFile:
     """A mechanism and the box of its joints.
 
@@ -45,6 +45,13 @@ class MechanismFile:
     mechanism: Mechanism
     axes: tuple
     bodies: object = None
+
+    def __repr__(self):
+        box = " x ".join(f"{name} ({a.count} cells a turn)" if a.periodic
+                         else f"{name} [{a.low:g}, {a.high:g}] step {a.step:g}"
+                         for name, a in zip(self.mechanism.joint_names, self.axes))
+        return (f"MechanismFile({self.mechanism.kind}: {box}; "
+                f"{'default bodies' if self.bodies is None else 'bodies of its own'})")
 
     def grid(self, fixed=None):
         """The grid over the box with some joints fixed.

@@ -1,6 +1,17 @@
 """The workspace roadmap: grid, n-solution field, continuity, rotary disk
 search, segmentation and the roadmap graph, on uniform or adaptive grids,
-for any mechanism."""
+for any mechanism.
+
+The builds that can take seconds (:func:`compute_field`, :func:`segment`,
+:func:`refine`, :func:`build_roadmap`, and
+:func:`~rpr3_gwr_core.workspace.cusps.cusp_curves`) take an optional
+keyword ``progress``, called as ``progress(stage, fraction)`` with the name
+of the running stage and the fraction of the call's work done
+(non-decreasing, in [0, 1]); the core never prints, its caller shows the
+progress (the command line on stderr, the builder node in its log).
+Objects print a one-line summary, e.g. ``Roadmap(3-RPR: 7 regions, 24
+patches, 36 gates; ...)``.
+"""
 
 from .adaptive import AdaptiveGrid, grid_from_dict, refine
 from .field import NSolutionField, compute_field

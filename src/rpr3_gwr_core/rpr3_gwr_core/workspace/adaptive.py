@@ -56,6 +56,7 @@ from scipy import sparse
 from scipy.sparse.csgraph import dijkstra
 
 from ..exceptions import InvalidInputError
+from ._progress import part
 from .continuity import match_solutions
 from .field import compute_field
 from .grid import MAX_GRID_CELLS, Axis, Grid, GridBase, _box_points, _within_box, lattice_box
@@ -170,6 +171,10 @@ class AdaptiveGrid(GridBase):
     def size(self):
         """Number of cells."""
         return int(self._index.size)
+
+    def _cells_phrase(self):
+        return (f"{self.size:,} cells (base {' x '.join(map(str, self.base.shape))}, "
+                f"{self.blocks.size:,} blocks refined {self.refinement} times)")
 
     def _multi(self, cells=None):
         index = self._index if cells is None else self._index[cells]
@@ -489,7 +494,8 @@ def coarse_base(grid, refinement=DEFAULT_REFINEMENT):
     return Grid(axes=tuple(axes), fixed=grid.fixed)
 
 
-def refine(mechanism, base, refinement=DEFAULT_REFINEMENT, min_margin=DEFAULT_REFINE_MARGIN):
+def refine(mechanism, base, refinement=DEFAULT_REFINEMENT, min_margin=DEFAULT_REFINE_MARGIN, *,
+           progress=None):
     """The adaptive grid of a base grid under the refinement rule (module doc).
 
     Parameters
@@ -501,6 +507,10 @@ def refine(mechanism, base, refinement=DEFAULT_REFINEMENT, min_margin=DEFAULT_RE
         Fine points per base step, at least 2.
     min_margin : float
         Rule 3's margin, non-negative.
+    progress : callable, optional
+        Called as ``progress(stage, fraction)`` (the stage's name, the
+        fraction of the work done) as the base field is solved and each
+        axis' edges are checked.
 
     Returns
     -------
@@ -520,7 +530,8 @@ def refine(mechanism, base, refinement=DEFAULT_REFINEMENT, min_margin=DEFAULT_RE
     if not (math.isfinite(min_margin) and min_margin >= 0):
         raise InvalidInputError(f"min_margin must be finite and >= 0, got {min_margin}")
     AdaptiveGrid(base, refinement, ())  # validates before the field is computed
-    field = compute_field(mechanism, base)
+    report = part(progress, within="refinement")
+    field = compute_field(mechanism, base, progress=part(report, 0.0, 0.6, "base grid"))
     shape = base.shape
     blocks = _block_shape(base)
     periodic = np.array([a.periodic for a in base.axes])
@@ -532,7 +543,9 @@ def refine(mechanism, base, refinement=DEFAULT_REFINEMENT, min_margin=DEFAULT_RE
     for corner in corners:
         uniform &= ((_corner_view(count, corner, periodic, blocks) == first)
                     & (_corner_view(weakest, corner, periodic, blocks) >= min_margin))
-    for axis, (lower, upper) in enumerate(base.pairs()):
+    pairs = base.pairs()
+    for axis, (lower, upper) in enumerate(pairs):
+        report("continuity along the blocks' edges", 0.6 + 0.4 * axis / len(pairs))
         match = match_solutions(field, lower, upper)
         continues = ((field.count[lower] == field.count[upper])
                      & np.all((match >= 0) == field.valid[lower], axis=1))
@@ -548,4 +561,6 @@ def refine(mechanism, base, refinement=DEFAULT_REFINEMENT, min_margin=DEFAULT_RE
             if corner[axis]:
                 continue
             uniform &= _corner_view(edges, corner, periodic, blocks)
-    return AdaptiveGrid(base, refinement, np.flatnonzero(~uniform.ravel()))
+    grid = AdaptiveGrid(base, refinement, np.flatnonzero(~uniform.ravel()))
+    report("blocks picked", 1.0)
+    return grid

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..exceptions import InvalidInputError, OutOfGridError
+from ._progress import part
 
 __all__ = ["Cusp", "find_cusps", "known_cusps", "cusp_curves"]
 
@@ -30,7 +31,7 @@ _SAME_CUSP = 1e-6
 _REGION_REACH = 8
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Cusp:
     """A cusp point of a slice's singular curve.
 
@@ -46,6 +47,13 @@ class Cusp:
     joints: np.ndarray
     pose: np.ndarray
     regions: tuple
+
+    def __repr__(self):
+        def values(array):
+            return ", ".join(f"{v:.6g}" for v in np.asarray(array).tolist())
+
+        return (f"Cusp(joints ({values(self.joints)}), pose ({values(self.pose)}), "
+                f"regions {', '.join(map(str, self.regions)) or 'none'})")
 
     def to_dict(self, mechanism):
         """Plain data: joints and pose by name, and the regions."""
@@ -102,7 +110,7 @@ def known_cusps(roadmap):
         return []
 
 
-def cusp_curves(roadmaps, substeps=4):
+def cusp_curves(roadmaps, substeps=4, *, progress=None):
     """Cusp curves across slices that differ in the value of one fixed joint.
 
     Parameters
@@ -112,6 +120,9 @@ def cusp_curves(roadmaps, substeps=4):
         joints, one fixed joint's value increasing from one to the next.
     substeps : int
         Newton continuations between two slices, at least 1.
+    progress : callable, optional
+        Called as ``progress(stage, fraction)`` (the stage's name, the
+        fraction of the work done) as each slice is done.
 
     Returns
     -------
@@ -140,8 +151,10 @@ def cusp_curves(roadmaps, substeps=4):
         raise InvalidInputError("substeps must be at least 1")
     joint = moving[0]
     mechanism = roadmaps[0].mechanism
+    report = part(progress)
     curves, open_curves = [], []
     for k, roadmap in enumerate(roadmaps):
+        report("cusps of each slice", k / len(roadmaps))
         fresh = find_cusps(roadmap)
         taken = set()
         still_open = []
@@ -158,6 +171,7 @@ def cusp_curves(roadmaps, substeps=4):
                 curves.append(curve)
                 still_open.append(curve)
         open_curves = still_open
+    report("cusps of each slice", 1.0)
     return curves
 
 

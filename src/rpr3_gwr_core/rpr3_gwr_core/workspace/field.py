@@ -13,14 +13,17 @@ import os
 
 import numpy as np
 
+from ._progress import part
+
 __all__ = ["NSolutionField", "compute_field"]
 
 
 _CHUNK = 8192
 _WORKERS = max(1, min(4, os.cpu_count() or 1))
+_REPORTS = 20
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class NSolutionField:
     """Direct-kinematic solutions of every cell of a grid.
 
@@ -42,6 +45,13 @@ class NSolutionField:
     count: np.ndarray
     poses: np.ndarray
     margin: np.ndarray
+
+    def __repr__(self):
+        counts = np.flatnonzero(np.bincount(self.count, minlength=1)[1:]) + 1
+        solved = (f"{int(np.count_nonzero(self.count)):,} cells with {counts[0]} to "
+                  f"{counts[-1]} solutions" if counts.size else "no solution")
+        return (f"NSolutionField({self.mechanism.kind}, "
+                f"{self.grid.describe(self.mechanism.joint_names)}; {solved})")
 
     @property
     def max_solutions(self):
@@ -79,7 +89,7 @@ class NSolutionField:
         return out
 
 
-def compute_field(mechanism, grid):
+def compute_field(mechanism, grid, *, progress=None):
     """Solve the direct kinematics on every cell of a grid.
 
     Parameters
@@ -87,6 +97,9 @@ def compute_field(mechanism, grid):
     mechanism : Mechanism
     grid : Grid
         Over the mechanism's joints.
+    progress : callable, optional
+        Called as ``progress(stage, fraction)`` (the stage's name, the
+        fraction of the work done) as chunks of cells are solved.
 
     Returns
     -------
@@ -113,14 +126,20 @@ def compute_field(mechanism, grid):
     # and keep every core busy: numpy, LAPACK and the mechanisms' compiled
     # kernels release the GIL.
     def solve(start):
-        part = slice(start, start + _CHUNK)
-        count[part], poses[part] = mechanism.solve(joints[part])
-        valid = np.arange(n) < count[part, None]
-        margin[part][valid] = mechanism.margin(
-            poses[part][valid], np.broadcast_to(joints[part, None, :], valid.shape + (
+        rows = slice(start, start + _CHUNK)
+        count[rows], poses[rows] = mechanism.solve(joints[rows])
+        valid = np.arange(n) < count[rows, None]
+        margin[rows][valid] = mechanism.margin(
+            poses[rows][valid], np.broadcast_to(joints[rows, None, :], valid.shape + (
                 mechanism.n_joints,))[valid])
 
+    report = part(progress)
+    starts = range(0, grid.size, _CHUNK)
     with ThreadPoolExecutor(max_workers=_WORKERS) as pool:
-        list(pool.map(solve, range(0, grid.size, _CHUNK)))
+        # map yields in order in this thread: the callback never runs in a
+        # worker.  At most _REPORTS calls, which a log can take line by line.
+        for done, _ in enumerate(pool.map(solve, starts), 1):
+            if done * _REPORTS // len(starts) > (done - 1) * _REPORTS // len(starts):
+                report("n-solution field", done / len(starts))
     return NSolutionField(mechanism=mechanism, grid=grid, count=count, poses=poses,
                           margin=margin)

@@ -193,6 +193,35 @@ class GridBase:
                 values[..., k] = start + np.remainder(values[..., k] - start, axis.period)
         return values
 
+    def describe(self, joint_names=None):
+        """One line: each axis' joint and range, the step, the cells and the
+        fixed joints, e.g. ``rho2 [0, 50] x rho3 [0, 50], step 0.125: 401 x
+        401 cells at rho1 = 17``.
+
+        Parameters
+        ----------
+        joint_names : sequence of str, optional
+            One per joint of the mechanism (its ``joint_names``); else
+            joints are named by index.
+
+        Returns
+        -------
+        str
+        """
+        def name(joint):
+            return joint_names[joint] if joint_names else f"joint {joint}"
+
+        axes = " x ".join(f"{name(a.joint)} (a turn)" if a.periodic
+                          else f"{name(a.joint)} [{a.low:g}, {a.high:g}]" for a in self.axes)
+        steps = sorted(set(self.steps))
+        step = ", ".join(f"{s:g}" for s in steps)
+        fixed = ", ".join(f"{name(j)} = {v:g}" for j, v in self.fixed)
+        return (f"{axes}, step{'s' if len(steps) > 1 else ''} {step}: {self._cells_phrase()}"
+                + (f" at {fixed}" if fixed else ""))
+
+    def __repr__(self):
+        return f"{type(self).__name__}({self.describe()})"
+
     def fixed_value(self, joint):
         """Value of a fixed joint."""
         return dict(self.fixed)[joint]
@@ -255,7 +284,7 @@ class GridBase:
         return out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Grid(GridBase):
     """A uniform grid over some joints of a mechanism.
 
@@ -328,6 +357,9 @@ class Grid(GridBase):
     def size(self):
         """Total number of cells."""
         return math.prod(self.shape)
+
+    def _cells_phrase(self):
+        return f"{' x '.join(map(str, self.shape))} cells"
 
     def coordinates(self):
         """Axis values of every cell, shape (size, ndim), row-major."""

@@ -10,13 +10,14 @@ from time import perf_counter
 
 import networkx as nx
 
+from ._progress import part
 from .field import compute_field
 from .segmentation import segment
 
 __all__ = ["Roadmap", "build_roadmap", "roadmap_graph", "aspect_groups"]
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class Roadmap:
     """A built roadmap: its field, segmentation and graph.
 
@@ -34,6 +35,11 @@ class Roadmap:
     segmentation: object
     graph: nx.Graph
     timings: dict
+
+    def __repr__(self):
+        seg, mechanism = self.segmentation, self.mechanism
+        return (f"Roadmap({mechanism.kind}: {seg.n_regions} regions, {len(seg.patches)} "
+                f"patches, {len(seg.gates)} gates; {self.grid.describe(mechanism.joint_names)})")
 
     @property
     def field(self):
@@ -95,7 +101,10 @@ def build_roadmap(mechanism, grid, method="components", min_region_cells=8, prog
     min_region_cells : int
         Smallest set of cells that counts as a region.
     progress : callable, optional
-        Called as ``progress(stage_name, fraction_done)`` between stages.
+        Called as ``progress(stage, fraction)``, the stage's name and the
+        fraction of the build done (non-decreasing, ``("done", 1.0)``
+        last), as the field's cells are solved and between the stages of
+        the segmentation.
 
     Returns
     -------
@@ -113,17 +122,17 @@ def build_roadmap(mechanism, grid, method="components", min_region_cells=8, prog
     >>> [len(group) for group in aspect_groups(roadmap.graph)]
     [12, 12]
     """
-    report = progress or (lambda stage, fraction: None)
+    report = part(progress)
     timings = {}
     start = perf_counter()
     report("n-solution field", 0.0)
-    field = compute_field(mechanism, grid)
+    field = compute_field(mechanism, grid, progress=part(progress, 0.0, 0.4))
     timings["field"] = perf_counter() - start
-    report("regions, patches and gates", 0.4)
     start = perf_counter()
-    segmentation = segment(field, method=method, min_region_cells=min_region_cells)
+    segmentation = segment(field, method=method, min_region_cells=min_region_cells,
+                           progress=part(progress, 0.4, 0.99))
     timings["segmentation"] = perf_counter() - start
-    report("graph", 0.95)
+    report("graph", 0.99)
     start = perf_counter()
     graph = roadmap_graph(segmentation)
     timings["graph"] = perf_counter() - start

@@ -60,6 +60,7 @@ import scipy.sparse as sparse
 from scipy.sparse.csgraph import breadth_first_order, connected_components
 
 from ..exceptions import InvalidInputError
+from ._progress import part
 from .continuity import match_solutions
 from .rotary_disk import passage_from_links, rotary_disk_search
 
@@ -75,7 +76,7 @@ TABLE_TYPES = {"patch_ids": "<i8", "patch_region": "<i8", "patch_layer": "<i8",
                "gate_starts": "<i8", "gate_faces": "<i8"}
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class Patch:
     """One workspace patch.
 
@@ -108,8 +109,14 @@ class Patch:
     gate_cells: np.ndarray = dataclass_field(default_factory=lambda: np.zeros(0, int))
     singular_cells: np.ndarray = dataclass_field(default_factory=lambda: np.zeros(0, int))
 
+    def __repr__(self):
+        return (f"Patch({self.id}: region {self.region}, layer {self.layer}, "
+                f"aspect {self.aspect:+d}, {self.n_solutions} solutions, "
+                f"{self.cells.size} cells, {self.gate_cells.size} on gates, "
+                f"{self.singular_cells.size} on its singular boundary)")
 
-@dataclass(frozen=True, eq=False)
+
+@dataclass(frozen=True, eq=False, repr=False)
 class Gate:
     """The faces through which two patches continue into each other.
 
@@ -128,8 +135,12 @@ class Gate:
     faces: np.ndarray
     width: float
 
+    def __repr__(self):
+        a, b = self.patches
+        return f"Gate({a} - {b}: {len(self.faces)} faces, width {self.width:.4g})"
 
-@dataclass(frozen=True, eq=False)
+
+@dataclass(frozen=True, eq=False, repr=False)
 class Segmentation:
     """Regions, patches and gates of an n-solution field.
 
@@ -154,6 +165,12 @@ class Segmentation:
     patches: dict
     gates: dict
     matches: list
+
+    def __repr__(self):
+        mechanism = self.field.mechanism
+        return (f"Segmentation({self.n_regions} regions, {len(self.patches)} patches, "
+                f"{len(self.gates)} gates; {mechanism.kind}, "
+                f"{self.field.grid.describe(mechanism.joint_names)})")
 
     @property
     def n_regions(self):
@@ -413,7 +430,7 @@ def _checked_tables(field, region, patch, tables):
     return t
 
 
-def segment(field, method="components", min_region_cells=8):
+def segment(field, method="components", min_region_cells=8, *, progress=None):
     """Split a field into regions, patches and gates.
 
     Parameters
@@ -423,6 +440,9 @@ def segment(field, method="components", min_region_cells=8):
         How connected patches are found; both give the same result.
     min_region_cells : int
         Connected same-count sets smaller than this are singular locus.
+    progress : callable, optional
+        Called as ``progress(stage, fraction)`` (the stage's name, the
+        fraction of the work done) between stages.
 
     Returns
     -------
@@ -432,12 +452,16 @@ def segment(field, method="components", min_region_cells=8):
         raise InvalidInputError(f"method must be one of {METHODS}, got {method!r}")
     if int(min_region_cells) < 1:
         raise InvalidInputError("min_region_cells must be at least 1")
+    report = part(progress)
+    report("continuity across faces", 0.0)
     pairs = field.grid.pairs()
     # One thread per axis: the work is numpy's, which releases the GIL.
     with ThreadPoolExecutor(max_workers=len(pairs)) as pool:
         matches = list(pool.map(lambda pair: match_solutions(field, *pair), pairs))
     links = [(lo, up, match) for (lo, up), match in zip(pairs, matches)]
+    report("regions", 0.7)
     region = _regions(field, links, int(min_region_cells))
+    report("patches", 0.75)
     linked = [linked_solutions(lo, up, match) for lo, up, match in links]
     disk_links = _within_region_links(field, region, linked)
     n_disks = field.grid.size * field.max_solutions
@@ -448,7 +472,10 @@ def segment(field, method="components", min_region_cells=8):
         component = _components_by_csgraph(valid, disk_links, n_disks)
     patch = _absorb_unresolved(field, region,
                                _number_patches(field, region, component, disk_links), linked)
-    return Segmentation.from_arrays(field, region, patch, [m for _, _, m in links])
+    report("gates and singular boundaries", 0.9)
+    segmentation = Segmentation.from_arrays(field, region, patch, [m for _, _, m in links])
+    report("gates and singular boundaries", 1.0)
+    return segmentation
 
 
 def _regions(field, links, min_cells):
