@@ -5,6 +5,7 @@ roadmap."""
 
 import json
 import math
+import pathlib
 
 import numpy as np
 import pytest
@@ -132,8 +133,12 @@ def test_the_cli_summarises_and_plans_on_the_full_roadmap(full_roadmap, capsys, 
     assert len(summary["patches"]) == len(full_roadmap.segmentation.patches)
     start = [*map(str, POCKET_LEGS), str(math.degrees(POCKET_ALPHAS[0]))]
     goal = [*map(str, POCKET_LEGS), str(math.degrees(POCKET_ALPHAS[1]))]
-    assert main(["plan", "--full", "--start", *start, "--goal", *goal]) == 0
+    written = tmp_path / "plan.json"
+    assert main(["plan", "--full", "--start", *start, "--goal", *goal, "-o", str(written)]) == 0
     plan = json.loads(capsys.readouterr().out)
     assert plan["feasible"] and plan["validation"]["ok"]
+    assert main(["plot", str(written)]) == 0
+    drawn = pathlib.Path(json.loads(capsys.readouterr().out)["figure"])
+    assert drawn == tmp_path / "plan.png" and drawn.stat().st_size > 10_000
     assert main(["plan", "--rho1", "27.5", "--start", *start[1:], "--goal", *goal[1:]]) == 1
     assert json.loads(capsys.readouterr().out)["reason"] == "unreachable"

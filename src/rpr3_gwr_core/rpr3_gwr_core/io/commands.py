@@ -509,11 +509,9 @@ def _read_plan(path):
     try:
         with open(path, encoding="utf-8") as stream:
             plan = json.load(stream)
-        if plan["roadmap"].get("full"):
-            raise InvalidInputError(f"{path} is a --full plan: 'plot' draws plans at fixed "
-                                    "rho1 (the waypoints are in the JSON)")
         mechanism = mechanism_from_dict(plan["roadmap"]["mechanism"])
-        grid = Grid.from_dict(plan["roadmap"]["grid"])
+        # A --full plan's roadmap is the paper's full 3-DOF one, named, not described.
+        grid = None if plan["roadmap"].get("full") else Grid.from_dict(plan["roadmap"]["grid"])
         if "error" in plan or not plan.get("waypoints"):
             raise InvalidInputError(f"{path} holds no trajectory to draw")
         if plan.get("columns") != _columns(mechanism):
@@ -531,7 +529,8 @@ def _read_plan(path):
     except (KeyError, TypeError, AttributeError, ValueError, IndexError) as exc:
         raise InvalidInputError(f"{path} is not a plan written by 'rpr3-gwr plan' "
                                 f"({exc})") from None
-    if max([a.high for a in grid.axes] + [v for _, v in grid.fixed]) > MAX_LEG:
+    if grid is not None and max([a.high for a in grid.axes]
+                                + [v for _, v in grid.fixed]) > MAX_LEG:
         raise InvalidInputError(f"the grid of {path} is out of range: legs are at most "
                                 f"{MAX_LEG:g} length units")
     joint_angles, pose_angles = _angles(mechanism)
@@ -546,8 +545,15 @@ def _plot(args, progress):
     from .figures import plan_figure
 
     mechanism, grid, plan = _read_plan(args.plan_file)
-    check_roadmap_grid(mechanism, grid)
-    roadmap, _ = cached_roadmap(mechanism, grid, args.cache_dir, progress)
+    if grid is None:
+        roadmap, _, _ = _full_roadmap(args.cache_dir, progress)
+    else:
+        from .mechanism_file import roadmap_grid
+
+        check_roadmap_grid(mechanism, grid)
+        base, refinement = roadmap_grid(grid)
+        roadmap, _ = cached_roadmap(mechanism, base, args.cache_dir, progress,
+                                    refinement=refinement)
     output = args.output or os.path.splitext(args.plan_file)[0] + ".png"
     _save(output, plan_figure(roadmap, plan), dpi=110)
     return {"figure": output}
