@@ -64,7 +64,7 @@ class PlanningIndex:
     node_slot : ndarray of int64, shape (N,)
         Solution slot of each node in its cell.
     node_margin : ndarray of float64, shape (N,)
-        Margin magnitude (normalised |det Jx|) of each node's solution.
+        Margin magnitude (normalised ``|det Jx|``) of each node's solution.
     quantum : float
         The searches' length unit [joint unit] (:func:`~.astar.edge_quanta`).
     gate_pairs : ndarray of int64, shape (E, 2)
@@ -152,7 +152,7 @@ class PlanningIndex:
         ----------
         roadmap : Roadmap
         clearances : sequence of float
-            Clearances (normalised |det Jx|, in [0, 1)) to compute the gate
+            Clearances (normalised ``|det Jx|``, in [0, 1)) to compute the gate
             distances of.
         weights : sequence of float
             Clearance weights (the paper's ``w``, finite, non-negative) to

@@ -4,7 +4,7 @@
 A move between face-adjacent cells costs its length times the mean cost of
 the two cells.  A cell costs 1, so paths are as short as the cells allow,
 unless its solution is closer to singular than the requested ``clearance``
-(its normalised |det Jx|): then it costs a hundred times more, so a path
+(its normalised ``|det Jx|``): then it costs a hundred times more, so a path
 passes there only where nothing else leads on, as next to a cusp or through
 a narrow gate.  The paper's cost, ``1 + clearance_weight / d`` with ``d`` the
 distance in cells to the nearest cell outside the patch (singular edge,

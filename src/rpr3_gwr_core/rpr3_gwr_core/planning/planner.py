@@ -125,7 +125,7 @@ class PlanOptions:
     max_paths : int
         Most global paths reported.
     clearance : float
-        Margin (normalised |det Jx|) the path keeps from the singular locus
+        Margin (normalised ``|det Jx|``) the path keeps from the singular locus
         wherever the roadmap allows; it passes closer (down to the planner's
         ``min_margin``) only where nothing else leads on.
     """
@@ -272,7 +272,7 @@ class Planner:
         The paper's boundary cost weight of the local planner (0: shortest
         paths).
     min_margin : float
-        Smallest normalised |det Jx| accepted at start, goal and along a plan.
+        Smallest normalised ``|det Jx|`` accepted at start, goal and along a plan.
     max_step : float
         Validator's continuation step [length unit].
     retries : Retries
