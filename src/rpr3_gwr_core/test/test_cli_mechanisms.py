@@ -66,6 +66,10 @@ def test_cusps_on_the_paper_file_are_the_default_cusps(tmp_path, capsys):
     (["cusps", "--mechanism", PAPER, "--fix", "rho1=17", "--fix", "rho2=20"],
      "cusps are points of 2-D slices"),
     (["cusps", "--fix", "rho1=17"], "--fix needs --mechanism"),
+    (["plan", "--full", "--step", "0.1", "--start", "17", "12", "18", "0", "--goal", "17", "10",
+      "25", "0"], "--step: the full 3-DOF roadmap's grid is its own"),
+    (["plan", "--mechanism", PAPER, "--step", "0.1", "--start", "17", "12", "18", "0",
+      "--goal", "17", "10", "25", "0"], "--step: the paper's 3-RPR"),
 ])
 def test_what_does_not_fit_exits_with_code_2_and_one_line(argv, reason, capsys):
     with pytest.raises(SystemExit) as exit_info:

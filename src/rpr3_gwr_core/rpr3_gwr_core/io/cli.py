@@ -176,6 +176,9 @@ def _parser():
                            "answer gives the signed_margin of its ends (its sign the aspect) "
                            "and the path's min_abs_margin")
     plan.add_argument("--rho1", type=_leg, help="[length unit] default 17")
+    plan.add_argument("--step", type=_finite,
+                      help="[length unit] default 0.125: the slice's cell size; a finer grid "
+                           "sees ways narrower than a cell, as along a fold")
     _mechanism_options(plan)
     plan.add_argument("--full", action="store_true",
                       help="plan on the full 3-DOF roadmap: --start and --goal give rho1 first")

@@ -366,7 +366,9 @@ def _applied(planner, scene, args):
 def _plan(args, progress):
     from .cache import cached_planning
 
-    _paper_slice_options(args, ("rho1",))
+    if args.full and args.step is not None:
+        raise InvalidInputError("--step: the full 3-DOF roadmap's grid is its own")
+    _paper_slice_options(args, ("rho1", "step"))
     if args.mechanism is not None:
         return _plan_on_file(args, progress)
     if args.mode_tol is not None:
@@ -384,7 +386,7 @@ def _plan(args, progress):
         start, goal = args.start, args.goal
         roadmap_doc = {"mechanism": PAPER_GEOMETRY.to_dict(), "full": True}
     else:
-        grid = rho1_slice(args.rho1)
+        grid = rho1_slice(args.rho1, step=args.step)
         roadmap, index, _ = cached_planning(PAPER_GEOMETRY, grid, args.cache_dir, progress)
         start, goal = (args.rho1, *args.start), (args.rho1, *args.goal)
         roadmap_doc = {"mechanism": PAPER_GEOMETRY.to_dict(), "grid": grid.to_dict()}
