@@ -15,10 +15,11 @@ from rpr3_gwr_core.exceptions import InvalidInputError, PlanningTimeoutError
 from rpr3_gwr_core.paper import rho1_slice
 from rpr3_gwr_core.planning import Planner
 from rpr3_gwr_core.planning.index import LOW_MARGIN_FACTOR
-from rpr3_gwr_core.planning.planner import Retries
+from rpr3_gwr_core.planning.planner import PlanOptions, Retries
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
 
-from pose_reference import assert_executable, legs_of
+from pose_reference import (assert_executable, legs_of, random_full_configurations,
+                            same_aspect_pairs)
 
 D = math.radians
 # The paper's first example, an assembly-mode change and a short hop.
@@ -118,3 +119,28 @@ def test_without_a_budget_the_plan_follows_the_global_paths(full_planner):
     plan = Planner(full_planner.roadmap, full_planner.planning_index,
                    retries=Retries(promising_nodes=0)).plan(start, goal)
     assert plan.path_index == 0
+
+
+def _length(joints):
+    return float(np.linalg.norm(np.diff(joints, axis=0), axis=1).sum())
+
+
+def test_smoothing_pulls_full_roadmap_paths_taut(full_planner):
+    """Smoothed plans between random pose-space pairs pass the independent
+    continuation, are never longer than the unsmoothed ones, and the straight
+    segments that leave the patches' order shorten some by a tenth or more."""
+    rng = np.random.default_rng(5)
+    pairs = same_aspect_pairs(random_full_configurations(rng, 64))[:24]
+    gains = []
+    for (start, _), (goal, goal_pose) in pairs:
+        plain = full_planner.plan(start, goal)
+        smooth = full_planner.plan(start, goal, PlanOptions(smooth=True))
+        assert_executable(smooth, goal_pose, full_planner.min_margin)
+        assert smooth.validation.min_margin >= full_planner.min_margin
+        gains.append(1 - _length(smooth.joints) / _length(plain.joints))
+    assert min(gains) > -1e-9
+    assert max(gains) > 0.1
+    start, goal = FAR_ROUND
+    far = full_planner.plan(start, goal, PlanOptions(smooth=True))
+    assert_executable(far, far.poses[-1], full_planner.min_margin)
+    assert _length(far.joints) < 1.05 * 17.19

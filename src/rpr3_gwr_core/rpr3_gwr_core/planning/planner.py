@@ -410,6 +410,12 @@ class Planner:
             paths.append(path)
         path_index = next(k for k, p in enumerate(paths) if p.patches == path.patches)
         smoothed = False
+        if options.smooth and len(joints) > 2 and not self.roadmap.grid.fixed:
+            taut = self._pulled_taut(joints, patches, result, s, g, options.clearance,
+                                     termination, world)
+            if taut is not None:
+                result, joints, patches = taut
+                smoothed = True
         if options.smooth and len(joints) > 2 and not termination():
             rounded = self._round(joints, patches, s, g, options.clearance,
                                   min(result.min_margin,
@@ -606,6 +612,48 @@ class Planner:
             kept = np.union1d(kept, restored)
         return result, kept
 
+    def _pulled_taut(self, joints, patches, result, s, g, clearance, termination, world):
+        """The validated path with straight joint segments jumping as far
+        ahead as the validator lets them, found by bisection: between two
+        waypoints the segment must keep the clearance, or what the stretch
+        it replaces keeps where that is less.
+
+        The sheet shortcuts only join cells of the path's patches in their
+        order; on a roadmap of all the joints the patches fold over each
+        other, and a straight segment the platform follows well often
+        leaves that order.  Returns the validation, legs and patches of the
+        shorter path, or None when nothing shorter validates (or the
+        deadline passes first).
+        """
+        mechanism = self.roadmap.mechanism
+        poses = result.poses
+        margins = np.abs(mechanism.margin(poses, joints))
+
+        def straight(a, b):
+            floor = self._floor(margins[a:b + 1], clearance)
+            return self._validate_between(joints[[a, b]], poses[a], poses[b], floor, world).ok
+
+        kept, at = [0], 0
+        while at < len(joints) - 1:
+            if termination():
+                return None
+            low, high = at + 1, len(joints) - 1
+            if high > low and straight(at, high):
+                low = high
+            while high - low > 1:
+                middle = (low + high) // 2
+                if straight(at, middle):
+                    low = middle
+                else:
+                    high = middle
+            kept.append(low)
+            at = low
+        if len(kept) == len(joints):
+            return None
+        kept = np.array(kept)
+        taut = self._validate(joints[kept], s, g, self.min_margin, world)
+        return (taut, joints[kept], patches[kept]) if taut.ok else None
+
     def _failed_segment(self, result, joints, patches):
         """Index k of the segment from waypoint k - 1 to k where a refused path
         failed.  For a path that ends in another assembly mode, it is the
@@ -633,15 +681,21 @@ class Planner:
         return max(self.min_margin, min(0.25 * clearance, abs(s.margin), abs(g.margin)))
 
     def _validate(self, joints, s, g, min_margin, world=None):
-        """The validator's verdict, and in a scene the continuous collision
-        check's: a path that collides fails at the segment where it does."""
+        """:meth:`_validate_between` the located start and goal."""
+        return self._validate_between(joints, s.pose, g.pose, min_margin, world)
+
+    def _validate_between(self, joints, start_pose, goal_pose, min_margin, world=None):
+        """The validator's verdict on ``joints`` followed from ``start_pose``
+        to ``goal_pose``, and in a scene the continuous collision check's: a
+        path that collides fails at the segment where it does."""
         mechanism = self.roadmap.mechanism
-        result = validate_path(mechanism, joints, s.pose, g.pose, min_margin, self.max_step)
+        result = validate_path(mechanism, joints, start_pose, goal_pose, min_margin,
+                               self.max_step)
         if not result.ok or world is None:
             return result
         from ..world import path_collisions  # the world's kernels load only with a scene
 
-        hit = path_collisions(mechanism, world.scene, joints, s.pose, world.index.model)
+        hit = path_collisions(mechanism, world.scene, joints, start_pose, world.index.model)
         if hit is None:
             return result
         return dataclasses.replace(result, ok=False, reason=f"collision {hit.message}",
