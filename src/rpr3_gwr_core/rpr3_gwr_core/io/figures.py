@@ -153,7 +153,7 @@ def slice_figure(roadmap, fixed, cusps=()):
     fig, ax = _count_image(roadmap, plane, region, caption=(
         "Circled: the plane's regions, numbered by decreasing area as a 2-D roadmap of this "
         "plane numbers its regions; beside each, 'in r': the roadmap's region r it lies in "
-        f"(patch ids: {_id_base(roadmap)} x r + layer)."))
+        f"(patch ids: {roadmap.segmentation.id_base} x r + layer)."))
     for number, piece in _region_pieces(region):
         if piece["largest"] or piece["size"] >= _LABELLED_PIECE:
             _region_label(ax, plane, piece["at"], number)
@@ -668,16 +668,10 @@ def _aspect_colour(sign):
     return "tab:red" if sign > 0 else "tab:blue"
 
 
-def _id_base(roadmap):
-    """The factor of the region in a patch id: ``10**k`` with ``k`` the
-    digits of the mechanism's most solutions (as the segmentation forms them)."""
-    return 10 ** len(str(roadmap.mechanism.max_solutions))
-
-
 def _patch_id_caption(roadmap):
-    return (f"Patch id = {_id_base(roadmap)} x region + layer: a region with n solutions has n "
-            "patches, layers 1..n, negative aspect first, then in the solver's order of the "
-            "solutions at the region's first cell.")
+    return (f"Patch id = {roadmap.segmentation.id_base} x region + layer: a region with n "
+            "solutions has n patches, layers 1..n, negative aspect first, then in the solver's "
+            "order of the solutions at the region's first cell.")
 
 
 def _joint_unit(roadmap, joint):

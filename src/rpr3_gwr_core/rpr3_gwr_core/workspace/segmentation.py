@@ -177,6 +177,12 @@ class Segmentation:
         """Number of regions R."""
         return int(self.region.max(initial=0))
 
+    @property
+    def id_base(self):
+        """The factor of the region in a patch id: ``id = id_base * region +
+        layer`` (module doc)."""
+        return _id_base(self.field)
+
     @functools.cached_property
     def links(self):
         """Per grid axis, the face-adjacent cells ``(lower, upper)`` and
