@@ -10,7 +10,7 @@ cells: the paper's 3-RPR at rho1 = 17, the five-bar over its whole torus,
 the 3-RRR at th1 = 0, over its torus, the 3-PRR at s1 = 5), the median
 build time of the roadmap
 over ``--repeat`` builds, as a fraction of the eigenvalue baseline of
-``bench_roadmap.py`` measured in the same run (the issue's target: 0.25),
+``bench_roadmap.py`` measured in the same run (the target: 0.25),
 and plans between random same-aspect pairs of cell solutions with margin at
 least 0.05 (p50 / p95 / max; target p50 <= 5 ms), with the reasons of the
 pairs refused (``unreachable``: the roadmap joins the pair's patches by no
@@ -19,7 +19,7 @@ joints turning, ``config/three_rrr.yaml``'s 120 cells a turn as the fine
 lattice of an adaptive grid refined ``--full-refinement`` times), built
 once in a fresh process: its wall and CPU time, the time of its planning
 index, its peak resident memory (``ru_maxrss`` of the child), cells,
-regions, patches and gates (the issue's budget: 60 s and 2 GB).  Prints one
+regions, patches and gates (the budget: 60 s and 2 GB).  Prints one
 JSON line per measurement.
 """
 

@@ -5,10 +5,10 @@ Run on demand (after ``source ros2_ws/env.sh``):
 
 ``--full`` has the builder publish the full 3-DOF roadmap (from the roadmap
 cache, built there first if needed) and the clients ask for the pocket
-example of issue 10, with rho1 moving.
+example (two modes of the same legs that only a motion of rho1 joins).
 
 Starts roadmap_builder and planner as processes (the localhost Fast DDS
-profile, a domain of their own), then:
+profile; the user's ROS_DOMAIN_ID, else a domain of their own), then:
 
 * publish-to-usable: from the builder's call of ``publish`` (its
   "published" log line minus the publishing time it reports) to the
@@ -39,9 +39,12 @@ LIB = ROOT / "ros2_ws" / "install" / "rpr3_gwr_nodes" / "lib" / "rpr3_gwr_nodes"
 PROFILE = ROOT / "ros2_ws" / "fastdds_localhost.xml"
 os.environ.update(FASTRTPS_DEFAULT_PROFILES_FILE=str(PROFILE),
                   FASTDDS_DEFAULT_PROFILES_FILE=str(PROFILE),
-                  RMW_IMPLEMENTATION="rmw_fastrtps_cpp",
-                  ROS_DOMAIN_ID=str(random.SystemRandom().randint(1, 100)))
+                  RMW_IMPLEMENTATION="rmw_fastrtps_cpp")
 os.environ.pop("ROS_AUTOMATIC_DISCOVERY_RANGE", None)
+# A user's ROS_DOMAIN_ID is kept; unset, this run takes one of its own in
+# 1..100 (domains above 101 can collide with ephemeral ports).
+if not os.environ.get("ROS_DOMAIN_ID"):
+    os.environ["ROS_DOMAIN_ID"] = str(random.SystemRandom().randint(1, 100))
 
 import rclpy  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
@@ -144,7 +147,7 @@ def main():
         single = [_call(clients[0], _request(k, examples)) for k in range(args.requests)]
         print(json.dumps(dict(_summary(single, time.perf_counter() - begin), clients=1)))
         # Each client's first exchange completes the server's discovery of its
-        # response reader (see tests/test_suite.py, _handshake): not timed.
+        # response reader (as PlannerClient.wait_until_ready does): not timed.
         for client in clients[1:]:
             for _ in range(3):
                 try:

@@ -1,7 +1,8 @@
 """The planner node under hostile requests: every request gets an answer with
 a code from the list, every success is a sound trajectory, the node keeps
-serving.  Real rclpy and Fast DDS: a planner node, a publisher of the
-paper's roadmap messages and a client, spun by one executor thread."""
+serving.  Real rclpy and Fast DDS: a planner node and a publisher of the
+paper's roadmap messages, spun by one executor thread, and a PlannerClient
+spinning itself in the test's thread."""
 
 import collections
 import math
@@ -21,6 +22,7 @@ from rpr3_gwr_core.planning import Planner
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
 from rpr3_gwr_msgs.msg import Configuration, NSolutionField, WorkspaceRoadmap
 from rpr3_gwr_msgs.srv import PlanPath
+from rpr3_gwr_nodes.client import PlannerClient
 from rpr3_gwr_nodes.conversions import roadmap_to_msgs
 from rpr3_gwr_nodes.planner import PlannerNode
 from rpr3_gwr_nodes.profiles import LATCHED_QOS
@@ -56,7 +58,8 @@ def _joints(configuration):
 
 
 class PlannerUnderTest:
-    """A planner node fed the paper's roadmap messages, and a client."""
+    """A planner node fed the paper's roadmap messages by a feeder node that
+    also listens to its path markers, and a client."""
 
     def __init__(self, context, namespace="", **planner_options):
         self.stamp = Header(frame_id="rpr3_base")
@@ -67,26 +70,24 @@ class PlannerUnderTest:
         self.feeder = Node("roadmap_feeder", context=context, namespace=namespace)
         self.feeder.create_publisher(NSolutionField, "field", LATCHED_QOS).publish(field_msg)
         self.feeder.create_publisher(WorkspaceRoadmap, "roadmap", LATCHED_QOS).publish(roadmap_msg)
-        self.client = Node("planner_test_client", context=context, namespace=namespace)
-        self.plan_client = self.client.create_client(PlanPath, "plan_path")
         self.path_markers = []
-        self.client.create_subscription(MarkerArray, "planned_path_markers",
+        self.feeder.create_subscription(MarkerArray, "planned_path_markers",
                                         self.path_markers.append, 10)
         self.executor = MultiThreadedExecutor(num_threads=4, context=context)
-        for node in (self.planner, self.feeder, self.client):
+        for node in (self.planner, self.feeder):
             self.executor.add_node(node)
         self.thread = threading.Thread(target=self.executor.spin, daemon=True)
         self.thread.start()
+        self.client = PlannerClient("planner_test_client", context=context, namespace=namespace)
         assert self.planner.ready.wait(60.0), "the planner got no roadmap"
         assert self.planner.indexed.wait(120.0), "the planner's workers did not start"
-        assert self.plan_client.wait_for_service(timeout_sec=TIMEOUT)
+        self.client.wait_until_ready(timeout_sec=TIMEOUT)
 
     def call(self, request, timeout=TIMEOUT):
-        future = self.plan_client.call_async(request)
-        done = threading.Event()
-        future.add_done_callback(lambda _: done.set())
-        assert done.wait(timeout), f"no answer within {timeout} s to {request}"
-        return future.result()
+        """The planner's answer to ``request``, every field of it passed on."""
+        options = {name: getattr(request, name) for name in request.get_fields_and_field_types()
+                   if name not in ("start", "goal")}
+        return self.client.plan(request.start, request.goal, timeout_sec=timeout, **options)
 
     def plan(self, start, goal, **options):
         return self.call(PlanPath.Request(start=_configuration(start), goal=_configuration(goal),
@@ -98,9 +99,10 @@ class PlannerUnderTest:
                      for name in ("default_max_velocity", "default_max_acceleration"))
 
     def close(self):
+        self.client.destroy_node()
         self.executor.shutdown(timeout_sec=10.0)
         self.thread.join(timeout=10.0)
-        for node in (self.client, self.feeder, self.planner):
+        for node in (self.feeder, self.planner):
             node.destroy_node()
 
 
@@ -171,7 +173,7 @@ def check_sound(request, response, stamp, default_limits):
                   <= max_acceleration * rounding)
 
 
-# --- one test per defect the issue reported -----------------------------------------------------
+# --- regression tests, one per defect -----------------------------------------------------------
 
 @pytest.mark.parametrize("limit", [5e-324, 1e-300])
 def test_tiny_limits_are_an_invalid_input_and_the_node_still_serves(service, limit):

@@ -1,4 +1,4 @@
-"""Cusp points of the singular curve, against the values the issue gives for
+"""Cusp points of the singular curve, against reference values for
 rho1 = 17 (found independently of this code)."""
 
 import json

@@ -1,5 +1,5 @@
-"""The full 3-DOF roadmap (all legs in the default box): the facts of the
-issue, checked against configurations drawn on the torus (theta1, alpha) at
+"""The full 3-DOF roadmap (all legs in the default box): its known facts,
+checked against configurations drawn on the torus (theta1, alpha) at
 random rho1, with the other legs by inverse kinematics, independent of the
 roadmap."""
 
@@ -18,7 +18,7 @@ from rpr3_gwr_core.paper import FULL_BASE_GRID, rho1_slice
 from rpr3_gwr_core.planning.validation import validate_path
 from rpr3_gwr_core.workspace import AdaptiveGrid, build_roadmap
 
-# The pocket (issue): at rho1 in (26.79, 28.09) a small singular loop
+# The pocket: at rho1 in (26.79, 28.09) a small singular loop
 # encloses part of the det Jx < 0 side.  Found on a 720 x 720 torus lattice
 # at rho1 = 27.5 (the det < 0 set in the box has two components there, of
 # 177,957 and 8,791 lattice points): the same legs, one solution in the

@@ -31,7 +31,7 @@ from rpr3_gwr_core.workspace.roadmap import build_roadmap
 
 from moving_base_reference import MovingBaseReference, check_kernel_agrees_with_step, wrap
 
-# The geometry, written again rather than read from the mechanism:
+# The default geometry, written again rather than read from the mechanism:
 # the paper's base points and platform (sides 17.04, 16.54, 20.84), l1 = 8
 # and l2 = 12 on every leg.
 A = np.array([[0.0, 0.0], [15.91, 0.0], [0.0, 10.0]])
@@ -39,7 +39,7 @@ D1, D2, D3 = 17.04, 16.54, 20.84
 BETA = math.acos((D1**2 + D3**2 - D2**2) / (2 * D1 * D3))
 L1, L2 = 8.0, 12.0
 SCALE = max(D1, D2, D3)
-# The joints with six direct-kinematic solutions.
+# Joints with six direct-kinematic solutions.
 Q6 = (0.0, 0.13499, 0.55223)
 
 
@@ -156,7 +156,7 @@ def test_solutions_are_the_torus_preimages(th, n_solutions):
     assert np.max(np.abs(poses[0, :n_solutions] - expected)) < 1e-8
     assert np.all(np.isnan(poses[0, n_solutions:]))
     assert np.max(np.abs(reference_residual(expected, th))) < 1e-8
-    # All six are regular: no two solutions merge at the joints.
+    # All six are regular: no two solutions merge at these joints.
     assert np.min(np.abs(reference_margin(expected, th))) > 0.1
 
 

@@ -47,7 +47,7 @@ def torus_configuration(theta1, alpha, geometry=PAPER_GEOMETRY):
     return (*legs, alpha), np.array([b1[0], b1[1], alpha])
 
 
-# --- the configurations the issue reported as refused ---------------------------------------
+# --- configurations that must not be refused ------------------------------------------------
 
 @pytest.mark.parametrize("start, goal", [
     # locate tried only the nearest cell

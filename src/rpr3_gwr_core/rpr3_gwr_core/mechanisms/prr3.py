@@ -150,7 +150,7 @@ class ThreePRR(_MovingBaseRPR):
     gamma1: float = 0.0
     gamma2: float = math.pi / 2
     gamma3: float = math.pi / 4
-    l: float = 15.0  # noqa: E741 - the issue's name for the distal length
+    l: float = 15.0  # noqa: E741 - the distal length, named as in the literature
     d1: float = 17.04
     d3: float = 20.84
     beta: float = beta_from_sides(17.04, 16.54, 20.84)

@@ -612,7 +612,7 @@ class ThreeRRR(_MovingBaseRPR):
         return self.base_points(joints)
 
 
-# The 3-RRR: the paper's base points and platform, l1 = 8 and l2 = 12
+# The default 3-RRR: the paper's base points and platform, l1 = 8 and l2 = 12
 # on every leg.  Every joint vector of its slice th1 = 0 is assembled, with
 # 2, 4 or 6 solutions.
 DEFAULT_THREE_RRR = ThreeRRR()
