@@ -30,5 +30,8 @@ export FASTDDS_DEFAULT_PROFILES_FILE="$_rpr3_ws/fastdds_localhost.xml"
 # and opens sockets on other interfaces (seen with ss -uanp); the profile
 # alone keeps every socket on 127.0.0.1.
 unset ROS_AUTOMATIC_DISCOVERY_RANGE ROS_STATIC_PEERS
-export ROS_DOMAIN_ID="${ROS_DOMAIN_ID:-47}"
+# ROS_DOMAIN_ID stays the user's: set, every node of this shell uses it;
+# unset, the nodes run by hand use ROS's domain 0, and the demo, the tests
+# and bench/bench_service.py each pick a random one in 1..100 so that their
+# runs do not meet other graphs.
 unset _rpr3_ws _rpr3_root

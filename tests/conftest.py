@@ -1,7 +1,8 @@
 """Integration tests: real rclpy, Fast DDS and generated interfaces, no mocks.
 
-Every run uses the project's loopback-only Fast DDS profile and a ROS domain
-of its own, chosen here before any test imports rclpy.
+Every run uses the project's loopback-only Fast DDS profile and the user's
+ROS_DOMAIN_ID, or when it is unset a ROS domain of its own, chosen here
+before any test imports rclpy.
 """
 
 import os
@@ -19,8 +20,10 @@ os.environ["RMW_IMPLEMENTATION"] = "rmw_fastrtps_cpp"
 # LOCALHOST would make rmw_fastrtps override the profile's transports (env.sh).
 os.environ.pop("ROS_AUTOMATIC_DISCOVERY_RANGE", None)
 os.environ.pop("ROS_STATIC_PEERS", None)
-# Domains above 101 can collide with ephemeral ports; stay within 1..100.
-os.environ["ROS_DOMAIN_ID"] = str(random.SystemRandom().randint(1, 100))
+# A user's ROS_DOMAIN_ID is kept; unset, this run takes one of its own in
+# 1..100 (domains above 101 can collide with ephemeral ports).
+if not os.environ.get("ROS_DOMAIN_ID"):
+    os.environ["ROS_DOMAIN_ID"] = str(random.SystemRandom().randint(1, 100))
 
 
 def _private_context():

@@ -1,7 +1,8 @@
 """The simulated driver on control conventions: goals validated and rejected
 when they arrive, one goal at a time, aborts that say why, diagnostics by
-margin, hostile resets and goals answered with codes.  A driver node and a
-client over real DDS, spun by one executor thread."""
+margin, hostile resets and goals answered with codes.  A driver node over
+real DDS, spun by one executor thread, and a PlannerClient spinning itself
+in the test's thread."""
 
 import collections
 import math
@@ -14,7 +15,6 @@ import yaml
 from builtin_interfaces.msg import Duration
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from hypothesis import HealthCheck, given, settings, strategies as st
-from rclpy.action import ActionClient
 from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -22,6 +22,7 @@ from rpr3_gwr_core.mechanisms.rpr3 import ThreeRPR
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import Configuration, PlatformPose
 from rpr3_gwr_msgs.srv import ResetDriver
+from rpr3_gwr_nodes.client import PlannerClient
 from rpr3_gwr_nodes.profiles import SENSOR_QOS
 from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
 from rpr3_gwr_nodes.rpr3_driver import Rpr3Driver
@@ -38,13 +39,6 @@ RESULT_CODES = {getattr(_Result, n): n for n in dir(_Result)
                 if n.isupper() and isinstance(getattr(_Result, n), int)}
 RESET_CODES = {getattr(ResetDriver.Response, n): n for n in dir(ResetDriver.Response)
                if n.startswith("ERROR_")}
-
-
-def _wait(future, timeout=TIMEOUT):
-    done = threading.Event()
-    future.add_done_callback(lambda _: done.set())
-    assert done.wait(timeout), f"no answer within {timeout} s"
-    return future.result()
 
 
 def _stamp(seconds):
@@ -69,33 +63,28 @@ class DriverUnderTest:
     def __init__(self, context):
         self.driver = Rpr3Driver(context=context, parameter_overrides=[
             Parameter("time_scale", value=20.0), Parameter("rate", value=100.0)])
-        self.client = Node("driver_test_client", context=context)
-        self.reset_client = self.client.create_client(ResetDriver, "reset")
-        self.action_client = ActionClient(self.client, ExecuteTrajectory, "execute_trajectory")
+        # Diagnostics arrive in the rig's executor, whatever the client does.
+        self.listener = Node("driver_test_listener", context=context)
         self.diagnostics = []
-        self.client.create_subscription(DiagnosticArray, "/diagnostics",
-                                        self.diagnostics.append, 10)
+        self.listener.create_subscription(DiagnosticArray, "/diagnostics",
+                                          self.diagnostics.append, 10)
         self.executor = MultiThreadedExecutor(num_threads=4, context=context)
-        for node in (self.driver, self.client):
+        for node in (self.driver, self.listener):
             self.executor.add_node(node)
         self.thread = threading.Thread(target=self.executor.spin, daemon=True)
         self.thread.start()
-        assert self.reset_client.wait_for_service(timeout_sec=TIMEOUT)
-        assert self.action_client.wait_for_server(timeout_sec=TIMEOUT)
+        self.client = PlannerClient("driver_test_client", context=context)
 
     def reset(self, configuration, names=()):
         c = Configuration(joint_names=list(names), positions=list(configuration[:-1]),
                           mode=configuration[-1])
-        return _wait(self.reset_client.call_async(ResetDriver.Request(configuration=c)))
+        return self.client.reset_driver(c, timeout_sec=TIMEOUT)
 
     def send(self, trajectory):
-        return _wait(self.action_client.send_goal_async(ExecuteTrajectory.Goal(
-            trajectory=trajectory)))
+        return self.client.send_goal(trajectory, timeout_sec=TIMEOUT)
 
     def execute(self, trajectory):
-        handle = self.send(trajectory)
-        assert handle.accepted
-        return _wait(handle.get_result_async(), timeout=120.0).result
+        return self.client.execute(trajectory, timeout_sec=120.0).result
 
     def level_after(self, since, timeout=5.0):
         """The level of the first diagnostics published after index ``since``."""
@@ -106,9 +95,10 @@ class DriverUnderTest:
         return self.diagnostics[since].status[0].level
 
     def close(self):
+        self.client.destroy_node()
         self.executor.shutdown(timeout_sec=10.0)
         self.thread.join(timeout=10.0)
-        self.client.destroy_node()
+        self.listener.destroy_node()
         self.driver.destroy_node()
 
 
@@ -222,8 +212,8 @@ def test_a_second_goal_is_rejected_while_one_executes(rig):
         busy = rig.reset(Q1)
         assert busy.error_code == ResetDriver.Response.ERROR_BUSY
     finally:
-        _wait(first.cancel_goal_async())
-    assert _wait(first.get_result_async()).result.error_code == _Result.CANCELED
+        rig.client.cancel(first)
+    assert rig.client.get_result(first, TIMEOUT).result.error_code == _Result.CANCELED
 
 
 def test_an_abort_says_why_with_its_margin_and_diagnostics_go_to_error(rig):
@@ -264,7 +254,7 @@ def test_the_mechanism_markers_have_the_legs_of_the_joint_states(rig):
             pairs = [(stamps[key], array) for array in markers
                      if (key := (array.markers[0].header.stamp.sec,
                                  array.markers[0].header.stamp.nanosec)) in stamps]
-        _wait(moving.get_result_async())
+        rig.client.get_result(moving, TIMEOUT)
     finally:
         executor.shutdown()
         listener.destroy_node()
@@ -359,7 +349,7 @@ def test_fuzzed_goals_are_rejected_or_end_with_a_code(rig, trajectory):
     if not handle.accepted:
         outcomes["goal rejected"] += 1
         return
-    result = _wait(handle.get_result_async(), timeout=60.0).result
+    result = rig.client.get_result(handle, 60.0).result
     assert result.error_code in RESULT_CODES
     outcomes["goal " + RESULT_CODES[result.error_code]] += 1
 

@@ -7,11 +7,10 @@ import time
 
 import numpy as np
 from rclpy.executors import MultiThreadedExecutor
-from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rpr3_gwr_core import Planner
 from rpr3_gwr_msgs.msg import Configuration
-from rpr3_gwr_msgs.srv import PlanPath
+from rpr3_gwr_nodes.client import PlannerClient
 from rpr3_gwr_nodes.conversions import roadmap_from_msgs, roadmap_to_msgs
 from rpr3_gwr_nodes.planner import PlannerNode
 from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
@@ -44,27 +43,22 @@ def test_a_builder_in_full_mode_feeds_a_planner_that_moves_rho1(ros_context, ful
     builder = RoadmapBuilder(context=ros_context,
                              parameter_overrides=[Parameter("full", value=True)])
     planner = PlannerNode(context=ros_context)
-    client_node = Node("full_client", context=ros_context)
-    client = client_node.create_client(PlanPath, "plan_path")
     executor = MultiThreadedExecutor(num_threads=3, context=ros_context)
-    for node in (builder, planner, client_node):
+    for node in (builder, planner):
         executor.add_node(node)
     spinner = threading.Thread(target=executor.spin, daemon=True)
     spinner.start()
+    client = PlannerClient("full_client", context=ros_context)
     try:
         start = time.monotonic()
         assert planner.ready.wait(TIMEOUT), "the planner got no full roadmap"
         print(f"full roadmap from the builder (cache) to usable in the planner: "
               f"{time.monotonic() - start:.1f} s")
         assert builder.roadmap.grid == full_roadmap.grid
-        assert client.wait_for_service(timeout_sec=10.0)
-        future = client.call_async(PlanPath.Request(start=_configuration(POCKET[0]),
-                                                    goal=_configuration(POCKET[1]),
-                                                    max_velocity=2.0, max_acceleration=4.0))
-        done = threading.Event()
-        future.add_done_callback(lambda _: done.set())
-        assert done.wait(TIMEOUT), "no answer"
-        response = future.result()
+        client.wait_until_ready(timeout_sec=TIMEOUT)
+        response = client.plan(_configuration(POCKET[0]), _configuration(POCKET[1]),
+                               smooth=False, max_velocity=2.0, max_acceleration=4.0,
+                               timeout_sec=TIMEOUT)
         assert response.success, response.error_msg
         assert not response.roadmap_fixed_joints and not response.roadmap_fixed_values
         legs = np.array([p.positions for p in response.trajectory.points])
@@ -73,9 +67,10 @@ def test_a_builder_in_full_mode_feeds_a_planner_that_moves_rho1(ros_context, ful
         # A slice request asks the builder for rho1 = 17 again: full is refused no more.
         assert builder.set_parameters([Parameter("full", value=False)])[0].successful
     finally:
+        client.destroy_node()
         executor.shutdown(timeout_sec=10.0)
         spinner.join(timeout=10.0)
-        for node in (client_node, planner, builder):
+        for node in (planner, builder):
             node.destroy_node()
 
 

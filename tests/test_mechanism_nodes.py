@@ -3,7 +3,8 @@ mechanism file: the builder builds the 3-RRR's slice th1 = 0, the planner
 plans its non-singular assembly-mode change (checked by a continuation of
 the test's own) and the driver executes it; on the five-bar the planner
 refuses an assembly-mode change as FEASIBILITY_OTHER_ASPECT.  Real rclpy and
-Fast DDS, the nodes in this process, spun by one executor thread."""
+Fast DDS, the nodes in this process, spun by one executor thread, and a
+PlannerClient spinning itself in the test's thread."""
 
 import math
 import pathlib
@@ -13,13 +14,13 @@ import time
 import numpy as np
 import pytest
 import yaml
-from rclpy.action import ActionClient
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import Configuration
-from rpr3_gwr_msgs.srv import PlanPath, ResetDriver
+from rpr3_gwr_msgs.srv import PlanPath
+from rpr3_gwr_nodes.client import PlannerClient
 from rpr3_gwr_nodes.planner import PlannerNode
 from rpr3_gwr_nodes.profiles import SENSOR_QOS
 from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
@@ -68,16 +69,9 @@ def _densified(joints, largest):
     return np.array(dense), waypoints
 
 
-def _wait(future, timeout=TIMEOUT):
-    done = threading.Event()
-    future.add_done_callback(lambda _: done.set())
-    assert done.wait(timeout), f"no answer within {timeout} s"
-    return future.result()
-
-
 class Suite:
     """Builder, planner and (optionally) driver on one mechanism file, in a
-    namespace of their own, and a client."""
+    namespace of their own, a listener of the driver's streams and a client."""
 
     def __init__(self, context, path, namespace, builder_parameters=(), driver=False):
         mechanism = [Parameter("mechanism_file", value=str(path))]
@@ -90,29 +84,28 @@ class Suite:
             self.driver = Rpr3Driver(context=context, namespace=namespace, parameter_overrides=[
                 *mechanism, Parameter("time_scale", value=50.0)])
             self.nodes.append(self.driver)
-        self.client = Node("mechanism_test_client", context=context, namespace=namespace)
-        self.nodes.append(self.client)
-        self.plan_client = self.client.create_client(PlanPath, "plan_path")
-        self.reset_client = self.client.create_client(ResetDriver, "reset")
-        self.action_client = ActionClient(self.client, ExecuteTrajectory, "execute_trajectory")
+        listener = Node("mechanism_test_listener", context=context, namespace=namespace)
+        self.nodes.append(listener)
         self.joint_states, self.markers = [], []
-        self.client.create_subscription(JointState, "joint_states", self.joint_states.append,
-                                        SENSOR_QOS)
-        self.client.create_subscription(MarkerArray, "mechanism_markers", self.markers.append,
-                                        SENSOR_QOS)
+        listener.create_subscription(JointState, "joint_states", self.joint_states.append,
+                                     SENSOR_QOS)
+        listener.create_subscription(MarkerArray, "mechanism_markers", self.markers.append,
+                                     SENSOR_QOS)
         self.executor = MultiThreadedExecutor(num_threads=4, context=context)
         for node in self.nodes:
             self.executor.add_node(node)
         self.thread = threading.Thread(target=self.executor.spin, daemon=True)
         self.thread.start()
+        self.client = PlannerClient("mechanism_test_client", context=context,
+                                    namespace=namespace)
         assert self.planner.ready.wait(TIMEOUT), "the planner got no roadmap"
-        assert self.plan_client.wait_for_service(timeout_sec=TIMEOUT)
+        self.client.wait_until_ready(timeout_sec=TIMEOUT)
 
-    def plan(self, start, goal, **options):
-        return _wait(self.plan_client.call_async(PlanPath.Request(start=start, goal=goal,
-                                                                  **options)))
+    def plan(self, start, goal, smooth=False, **options):
+        return self.client.plan(start, goal, smooth=smooth, timeout_sec=TIMEOUT, **options)
 
     def close(self):
+        self.client.destroy_node()
         self.executor.shutdown(timeout_sec=10.0)
         self.thread.join(timeout=10.0)
         for node in reversed(self.nodes):
@@ -175,14 +168,9 @@ def test_the_three_rrr_changes_assembly_mode_through_the_nodes(three_rrr):
         assert np.max(np.abs(np.r_[vertex[:2] - planned[:2], wrap(vertex[2] - planned[2])])) \
             < 1e-6
     # The driver executes it: from the first mode to the second.
-    reset = _wait(three_rrr.reset_client.call_async(ResetDriver.Request(
-        configuration=_rrr(MODE_A))))
+    reset = three_rrr.client.reset_driver(_rrr(MODE_A), timeout_sec=TIMEOUT)
     assert reset.success, reset.error_msg
-    assert three_rrr.action_client.wait_for_server(timeout_sec=TIMEOUT)
-    handle = _wait(three_rrr.action_client.send_goal_async(ExecuteTrajectory.Goal(
-        trajectory=trajectory)))
-    assert handle.accepted
-    result = _wait(handle.get_result_async()).result
+    result = three_rrr.client.execute(trajectory, timeout_sec=TIMEOUT).result
     assert result.error_code == ExecuteTrajectory.Result.SUCCESS, result.error_msg
     assert abs(wrap(result.final_pose.values[2] - MODE_B)) < 1e-3
     assert result.min_singularity_margin > 1e-3

@@ -16,7 +16,6 @@ import pathlib
 import subprocess
 import sys
 import textwrap
-import threading
 import time
 
 import pytest
@@ -26,8 +25,7 @@ from rpr3_gwr_core.exceptions import GWRError
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, rho1_slice
 from rpr3_gwr_core.planning import NEVER, PlanningIndex, PlanOptions
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
-from rpr3_gwr_msgs.msg import Configuration
-from rpr3_gwr_msgs.srv import PlanPath
+from rpr3_gwr_nodes.client import PlannerClient, configuration
 from rpr3_gwr_nodes.plan_workers import PlanWorkers
 
 from process_tree import children, wait_for_children
@@ -38,10 +36,8 @@ D = math.radians
 
 
 def _request(rho1, legs, alphas):
-    return PlanPath.Request(
-        start=Configuration(positions=[rho1, legs[0], legs[1]], mode=D(alphas[0])),
-        goal=Configuration(positions=[rho1, legs[0], legs[1]], mode=D(alphas[1])),
-        smooth=True)
+    """The start and the goal of an assembly-mode change."""
+    return tuple(configuration([rho1, *legs], D(alpha)) for alpha in alphas)
 
 
 # An assembly-mode change on each roadmap (the paper's at rho1 = 17): planned
@@ -63,13 +59,6 @@ def _rss(pid):
     raise AssertionError(f"no VmRSS for process {pid}")
 
 
-def _result(future, timeout=TIMEOUT):
-    done = threading.Event()
-    future.add_done_callback(lambda _: done.set())
-    assert done.wait(timeout), f"no answer within {timeout} s"
-    return future.result()
-
-
 @contextlib.contextmanager
 def _process(name, log):
     process = subprocess.Popen([str(LIB / name)], env=os.environ.copy(), stdout=log,
@@ -89,13 +78,12 @@ def _process(name, log):
 class _Swapper:
     """Sets the builder's rho1 and waits for the planner to answer from it."""
 
-    def __init__(self, node, planner, log_path):
+    def __init__(self, client, planner, log_path):
+        self.client = client
         self.planner = planner
         self.log_path = log_path
-        self.parameters = AsyncParameterClient(node, "roadmap_builder")
-        self.plan = node.create_client(PlanPath, "plan_path")
+        self.parameters = AsyncParameterClient(client, "roadmap_builder")
         assert self.parameters.wait_for_services(timeout_sec=TIMEOUT), "no builder"
-        assert self.plan.wait_for_service(timeout_sec=TIMEOUT), "no planner"
         self.stamp = None
         self.roadmaps = 0
 
@@ -108,19 +96,17 @@ class _Swapper:
         planned on it and they are ready."""
         workers = children(self.planner.pid)
         if rho1 is not None:
-            result = _result(self.parameters.set_parameters([Parameter("fixed_value",
-                                                                       value=rho1)]))
+            result = self.client.wait_for(self.parameters.set_parameters(
+                [Parameter("fixed_value", value=rho1)]), TIMEOUT, what="the builder's answer")
             assert result.results[0].successful, result.results[0].reason
         rho1 = 17.0 if rho1 is None else rho1
         deadline = time.monotonic() + TIMEOUT
-        while True:
-            response = _result(self.plan.call_async(REQUESTS[rho1]))
-            stamp = (response.roadmap_stamp.sec, response.roadmap_stamp.nanosec)
-            if list(response.roadmap_fixed_values) == [rho1] and stamp != self.stamp:
-                break
-            assert time.monotonic() < deadline, f"the planner never planned at rho1 = {rho1}"
-            time.sleep(0.05)
-        self.stamp = stamp
+        # The roadmap rebuilt at rho1, once the planner plans on it.
+        self.stamp = self.client.wait_until_ready(timeout_sec=TIMEOUT,
+                                                  newer_than=self.stamp).header.stamp
+        response = self.client.plan(*REQUESTS[rho1], timeout_sec=TIMEOUT)
+        assert response.roadmap_stamp == self.stamp
+        assert list(response.roadmap_fixed_values) == [rho1], response.error_msg
         assert response.success, response.error_msg
         # Each roadmap is planned on before the next is built: its workers
         # are the planner's n-th set.
@@ -145,26 +131,30 @@ def _settled(pids, seconds=1.0):
         time.sleep(0.1)
 
 
-def test_forty_roadmap_swaps_leave_every_process_within_20_percent(client_node, tmp_path):
+def test_forty_roadmap_swaps_leave_every_process_within_20_percent(ros_context, tmp_path):
     log_path = tmp_path / "nodes.log"
-    with open(log_path, "w") as log, \
-            _process("roadmap_builder", log) as builder, \
-            _process("planner", log) as planner:
-        swapper = _Swapper(client_node, planner, log_path)
-        swapper.swap(None)
-        begin = time.monotonic()
-        sizes = []
-        for k in range(1, SWAPS + 1):
-            workers = swapper.swap(14.0 if k % 2 else 17.0)
-            if k in (1, SWAPS):
-                assert len(workers) == os.cpu_count(), (workers, log_path.read_text())
-                sizes.append(_settled({
-                    "builder": builder.pid, "planner": planner.pid,
-                    **{f"plan worker {n}": pid for n, pid in enumerate(sorted(workers))}}))
-        print(f"\n{SWAPS} swaps in {time.monotonic() - begin:.1f} s; resident memory "
-              f"[MB] after the first and the last: " + ", ".join(
-                  f"{name} {sizes[0][name]:.0f} -> {sizes[1][name]:.0f}"
-                  for name in sizes[0]))
+    client = PlannerClient("swap_client", context=ros_context)
+    try:
+        with open(log_path, "w") as log, \
+                _process("roadmap_builder", log) as builder, \
+                _process("planner", log) as planner:
+            swapper = _Swapper(client, planner, log_path)
+            swapper.swap(None)
+            begin = time.monotonic()
+            sizes = []
+            for k in range(1, SWAPS + 1):
+                workers = swapper.swap(14.0 if k % 2 else 17.0)
+                if k in (1, SWAPS):
+                    assert len(workers) == os.cpu_count(), (workers, log_path.read_text())
+                    sizes.append(_settled({
+                        "builder": builder.pid, "planner": planner.pid,
+                        **{f"plan worker {n}": pid for n, pid in enumerate(sorted(workers))}}))
+            print(f"\n{SWAPS} swaps in {time.monotonic() - begin:.1f} s; resident memory "
+                  f"[MB] after the first and the last: " + ", ".join(
+                      f"{name} {sizes[0][name]:.0f} -> {sizes[1][name]:.0f}"
+                      for name in sizes[0]))
+    finally:
+        client.destroy_node()
     grown = {name: sizes[1][name] / sizes[0][name] for name in sizes[0]}
     assert max(grown.values()) <= GROWTH, (sizes, log_path.read_text()[-3000:])
 

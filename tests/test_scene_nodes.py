@@ -18,7 +18,6 @@ import yaml
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import Point, Point32, Polygon
 from hypothesis import HealthCheck, given, settings, strategies as st
-from rclpy.action import ActionClient
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -27,6 +26,7 @@ from rpr3_gwr_core.world import configuration_collision, load_scene, scene_from_
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import JointRange, Obstacle, Scene
 from rpr3_gwr_msgs.srv import PlanPath
+from rpr3_gwr_nodes.client import PlannerClient
 from rpr3_gwr_nodes.conversions import scene_from_msg, scene_to_msg
 from rpr3_gwr_nodes.profiles import LATCHED_QOS
 from rpr3_gwr_nodes.rpr3_driver import Rpr3Driver
@@ -72,7 +72,9 @@ def _wait_until(condition, timeout=TIMEOUT, what="a condition"):
 
 class SceneFeed:
     """A publisher of scenes on a rig's ``scene`` topic and a reader of a
-    node's ``~/current_scene`` echo."""
+    node's ``~/current_scene`` echo, on a node the rig's executor spins: the
+    echoes of the planner and of the driver, and the refusals (no echo),
+    are observed as they come."""
 
     def __init__(self, node, echo_topic):
         self.publisher = node.create_publisher(Scene, "scene", LATCHED_QOS)
@@ -100,7 +102,7 @@ def rig(module_context):
     # One plan worker: with a scene, requests must plan in the node's process.
     running = PlannerUnderTest(module_context, "scene_rig", parameter_overrides=[
         Parameter("plan_workers", value=1)])
-    running.scenes = SceneFeed(running.client, "planner/current_scene")
+    running.scenes = SceneFeed(running.feeder, "planner/current_scene")
     try:
         yield running
     finally:
@@ -204,7 +206,7 @@ def test_the_planner_answers_in_the_previous_scene_while_it_switches(ros_context
     rig = PlannerUnderTest(ros_context, "switching", parameter_overrides=[
         Parameter("plan_workers", value=0)])
     try:
-        feed = SceneFeed(rig.client, "planner/current_scene")
+        feed = SceneFeed(rig.feeder, "planner/current_scene")
         msg = _scene_msg(_document("paper_example1_blocked"))
         feed.publisher.publish(msg)
         answers = []
@@ -233,7 +235,7 @@ def test_a_scene_published_before_the_roadmap_is_planned_in(ros_context):
         rig = PlannerUnderTest(ros_context, "early", parameter_overrides=[
             Parameter("plan_workers", value=0)])
         try:
-            feed = SceneFeed(rig.client, "planner/current_scene")
+            feed = SceneFeed(rig.feeder, "planner/current_scene")
             _wait_until(lambda: any(e.header.stamp == msg.header.stamp for e in feed.echoes),
                         what="the scene's echo")
             response = rig.plan(Q1, Q2)
@@ -254,40 +256,32 @@ class DriverRig:
     def __init__(self, context):
         self.driver = Rpr3Driver(context=context, namespace="scene_driver", parameter_overrides=[
             Parameter("time_scale", value=20.0)])
-        self.client = Node("scene_driver_client", context=context, namespace="scene_driver")
-        self.scenes = SceneFeed(self.client, "rpr3_driver/current_scene")
-        self.action = ActionClient(self.client, ExecuteTrajectory, "execute_trajectory")
+        self.listener = Node("scene_driver_listener", context=context,
+                             namespace="scene_driver")
+        self.scenes = SceneFeed(self.listener, "rpr3_driver/current_scene")
         self.states, self.diagnostics, self.markers, self.obstacles = [], [], [], []
         for kind, topic, store, qos in (
                 (JointState, "joint_states", self.states, 10),
                 (DiagnosticArray, "/diagnostics", self.diagnostics, 10),
                 (MarkerArray, "mechanism_markers", self.markers, 10),
                 (MarkerArray, "scene_markers", self.obstacles, LATCHED_QOS)):
-            self.client.create_subscription(kind, topic, store.append, qos)
+            self.listener.create_subscription(kind, topic, store.append, qos)
         self.executor = MultiThreadedExecutor(num_threads=4, context=context)
-        for node in (self.driver, self.client):
+        for node in (self.driver, self.listener):
             self.executor.add_node(node)
         self.thread = threading.Thread(target=self.executor.spin, daemon=True)
         self.thread.start()
-        assert self.action.wait_for_server(timeout_sec=TIMEOUT)
+        self.client = PlannerClient("scene_driver_client", context=context,
+                                    namespace="scene_driver")
 
     def execute(self, trajectory):
-        handle = self._wait(self.action.send_goal_async(ExecuteTrajectory.Goal(
-            trajectory=trajectory)))
-        assert handle.accepted
-        return self._wait(handle.get_result_async(), 120.0).result
-
-    @staticmethod
-    def _wait(future, timeout=TIMEOUT):
-        done = threading.Event()
-        future.add_done_callback(lambda _: done.set())
-        assert done.wait(timeout), "no answer"
-        return future.result()
+        return self.client.execute(trajectory, timeout_sec=120.0).result
 
     def close(self):
+        self.client.destroy_node()
         self.executor.shutdown(timeout_sec=10.0)
         self.thread.join(timeout=10.0)
-        self.client.destroy_node()
+        self.listener.destroy_node()
         self.driver.destroy_node()
 
 

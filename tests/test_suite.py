@@ -1,5 +1,9 @@
 """The node suite in one process: builder -> planner -> service -> driver ->
-joint states -> bag, over real DDS with a multithreaded executor."""
+joint states -> bag, over real DDS with a multithreaded executor; the test
+talks to it through a PlannerClient, which spins itself, and loads it with
+plain clients spun by that executor: eight PlannerClients, each spinning its
+own executor in its thread, took three times as long for the same 800
+requests (their spinning holds the GIL the planner needs), a weaker load."""
 
 import math
 import threading
@@ -7,7 +11,6 @@ import time
 
 import numpy as np
 import pytest
-from rclpy.action import ActionClient
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
@@ -17,7 +20,8 @@ from scipy.optimize import brentq
 from rosbags.typesys import Stores, get_typestore
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import Configuration, NSolutionField, WorkspaceRoadmap
-from rpr3_gwr_msgs.srv import PlanPath, ResetDriver
+from rpr3_gwr_msgs.srv import PlanPath
+from rpr3_gwr_nodes.client import PlannerClient
 from rpr3_gwr_nodes.planner import PlannerNode
 from rpr3_gwr_nodes.profiles import LATCHED_QOS, SERVICE_QOS
 from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
@@ -48,6 +52,7 @@ def _configuration(values):
 
 
 def _wait(future, timeout=TIMEOUT):
+    """The result of a future of the load test's clients, spun elsewhere."""
     done = threading.Event()
     future.add_done_callback(lambda _: done.set())
     assert done.wait(timeout), f"no answer within {timeout} s"
@@ -74,7 +79,8 @@ def _handshake(client, request, attempts=3, timeout=10.0):
 
 
 class Suite:
-    """All nodes of the suite plus a client node, spun by one executor thread."""
+    """All nodes of the suite and a listener of the joint states, spun by one
+    executor thread, and a client."""
 
     def __init__(self, context, bag_path):
         self.context = context
@@ -85,40 +91,31 @@ class Suite:
         self.recorder = TrajectoryRecorder(context=context, parameter_overrides=[
             Parameter("bag_path", value=str(bag_path)),
             Parameter("record_joint_states", value=True)])
-        self.client = Node("suite_test_client", context=context)
-        self.plan_client = self.client.create_client(PlanPath, "plan_path")
-        self.reset_client = self.client.create_client(ResetDriver, "reset")
-        self.action_client = ActionClient(self.client, ExecuteTrajectory, "execute_trajectory")
+        self.listener = Node("suite_test_listener", context=context)
         self.joint_states = []
-        self.client.create_subscription(JointState, "joint_states", self.joint_states.append,
-                                        qos_profile_sensor_data)
+        self.listener.create_subscription(JointState, "joint_states", self.joint_states.append,
+                                          qos_profile_sensor_data)
         # Nodes added by tests; destroyed only after the executor stops, since
         # destroying a node while another thread spins can break its wait set.
         self.extra_nodes = []
         self.executor = MultiThreadedExecutor(num_threads=6, context=context)
-        for node in (self.builder, self.planner, self.driver, self.recorder, self.client):
+        for node in (self.builder, self.planner, self.driver, self.recorder, self.listener):
             self.executor.add_node(node)
         self.thread = threading.Thread(target=self.executor.spin, daemon=True)
         self.thread.start()
+        self.client = PlannerClient("suite_test_client", context=context)
         assert self.planner.ready.wait(120.0), "the planner got no roadmap"
+        self.client.wait_until_ready(timeout_sec=TIMEOUT)
 
-    def plan(self, start, goal, **options):
-        request = PlanPath.Request(start=_configuration(start), goal=_configuration(goal),
-                                   **options)
-        assert self.plan_client.wait_for_service(timeout_sec=TIMEOUT)
-        return _wait(self.plan_client.call_async(request))
+    def plan(self, start, goal, smooth=False, **options):
+        return self.client.plan(_configuration(start), _configuration(goal), smooth=smooth,
+                                timeout_sec=TIMEOUT, **options)
 
     def reset(self, configuration):
-        assert self.reset_client.wait_for_service(timeout_sec=TIMEOUT)
-        request = ResetDriver.Request(configuration=_configuration(configuration))
-        return _wait(self.reset_client.call_async(request))
+        return self.client.reset_driver(_configuration(configuration), timeout_sec=TIMEOUT)
 
     def execute(self, trajectory):
-        assert self.action_client.wait_for_server(timeout_sec=TIMEOUT)
-        handle = _wait(self.action_client.send_goal_async(ExecuteTrajectory.Goal(
-            trajectory=trajectory)))
-        assert handle.accepted
-        return _wait(handle.get_result_async(), timeout=120.0).result
+        return self.client.execute(trajectory, timeout_sec=120.0).result
 
     def add(self, node):
         self.extra_nodes.append(node)
@@ -126,9 +123,10 @@ class Suite:
         return node
 
     def close(self):
+        self.client.destroy_node()
         self.executor.shutdown(timeout_sec=10.0)
         self.thread.join(timeout=10.0)
-        for node in (*self.extra_nodes, self.client, self.recorder, self.driver, self.planner,
+        for node in (*self.extra_nodes, self.listener, self.recorder, self.driver, self.planner,
                      self.builder):
             node.destroy_node()
 

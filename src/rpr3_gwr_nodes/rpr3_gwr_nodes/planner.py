@@ -84,7 +84,25 @@ from .profiles import BASE_FRAME, LATCHED_QOS, SERVICE_QOS
 from .spin import run
 from .visualization import path_markers
 
-__all__ = ["PlannerNode", "ERROR_CODES", "FEASIBILITY", "plan_to_trajectory", "main"]
+__all__ = ["PlannerNode", "ERROR_CODES", "FEASIBILITY", "plan_to_trajectory", "main", "USAGE"]
+
+USAGE = """\
+usage: ros2 run rpr3_gwr_nodes planner [-h] [--ros-args ...]
+
+Plans singularity-free joint trajectories on the roadmap it receives (it
+computes none): answers ERROR_NO_ROADMAP until the first one is loaded.
+
+Subscribes  field, roadmap (the builder's, latched), scene (latched)
+Serves      plan_path (rpr3_gwr_msgs/srv/PlanPath)
+Publishes   planned_trajectory, planned_path_markers, ~/current_scene
+Parameters  clearance (0.02), default_max_velocity (1.0),
+            default_max_acceleration (2.0), default_time_limit (10.0 s),
+            plan_workers (one per core, read-only), mechanism_file ('' takes
+            any roadmap's mechanism, read-only), promising_nodes,
+            retry_global_paths, retry_repairs, retry_split_shortcuts,
+            detour_weight (read-only)
+Example     ros2 run rpr3_gwr_nodes planner --ros-args -p plan_workers:=0 -p clearance:=0.05
+"""
 
 ERROR_CODES = {
     "INVALID_INPUT": PlanPath.Response.ERROR_INVALID_INPUT,
@@ -243,6 +261,11 @@ class PlannerNode(Node):
         # Set once the latest roadmap's planning index is built and its
         # workers started (or failed to).
         self.indexed = threading.Event()
+        # Until a roadmap is loaded every request answers NO_ROADMAP: say why.
+        self.get_logger().info(
+            f"waiting for a roadmap on {self.resolve_topic_name('roadmap')} and "
+            f"{self.resolve_topic_name('field')} (from a roadmap_builder); "
+            f"{self.resolve_service_name('plan_path')} answers ERROR_NO_ROADMAP until then")
 
     @property
     def planner(self):
@@ -296,6 +319,9 @@ class PlannerNode(Node):
             f"{_describe(planner.roadmap)}, {len(planner.roadmap.graph)} patches, ready in "
             f"{time.perf_counter() - start:.3f} s")
         self.indexed.clear()
+        if not self.ready.is_set():
+            self.get_logger().info(f"ready: serving {self.resolve_service_name('plan_path')} on "
+                                   f"a roadmap of {_describe(planner.roadmap)}")
         self.ready.set()
         if previous is not None and previous.workers is not None:
             previous.workers.close()
@@ -544,4 +570,4 @@ def main(args=None):
     # Two threads per core: a thread waits while a worker plans, and converts
     # the plan to messages while the worker plans the next request (8
     # clients on 2 cores: 188 requests/s with 2 threads, 242 with 4, 243 with 6).
-    run(PlannerNode, MultiThreadedExecutor, args, num_threads=2 * _CORES)
+    run(PlannerNode, MultiThreadedExecutor, args, usage=USAGE, num_threads=2 * _CORES)

@@ -58,7 +58,24 @@ from .profiles import BASE_FRAME, LATCHED_QOS
 from .spin import run
 from .visualization import field_maps, roadmap_markers
 
-__all__ = ["RoadmapBuilder", "main"]
+__all__ = ["RoadmapBuilder", "main", "USAGE"]
+
+USAGE = """\
+usage: ros2 run rpr3_gwr_nodes roadmap_builder [-h] [--ros-args ...]
+
+Builds the global workspace roadmap of a mechanism (by default the paper's
+3-RPR at rho1 = 17) and publishes it, latched, for the planner; a change of
+the grid parameters rebuilds and republishes it.
+
+Publishes   field (rpr3_gwr_msgs/msg/NSolutionField), roadmap
+            (rpr3_gwr_msgs/msg/WorkspaceRoadmap), both latched; on 2-D grids
+            field_count_map, field_region_map, roadmap_markers
+Parameters  mechanism_file ('' for the paper's 3-RPR, read-only),
+            fixed_value (the first joint's value on the slice), ranges
+            ([min, max] of each free joint, [] for the file's box), step (0
+            for the file's), full (false; true: every joint free, cached)
+Example     ros2 run rpr3_gwr_nodes roadmap_builder --ros-args -p fixed_value:=13.0
+"""
 
 _GRID_PARAMETERS = ("fixed_value", "ranges", "step", "full")
 # The paper's slice: rho1 = 17.
@@ -107,6 +124,8 @@ class RoadmapBuilder(Node):
         self._rebuild = self.create_guard_condition(
             self._on_rebuild, callback_group=MutuallyExclusiveCallbackGroup())
         self._rebuild.trigger()
+        self.get_logger().info(f"building a first roadmap for "
+                               f"{self.roadmap_pub.topic_name} and {self.field_pub.topic_name}")
 
     def _values(self, overrides=None):
         values = {name: self.get_parameter(name).value for name in _GRID_PARAMETERS}
@@ -208,6 +227,7 @@ class RoadmapBuilder(Node):
             self.get_logger().error("the roadmap has no patch")
             self._keep_last_good()
             return
+        first = self.roadmap is None
         self.roadmap, self._published = roadmap, values
         built = time.perf_counter()
         header = Header(stamp=self.get_clock().now().to_msg(), frame_id=BASE_FRAME)
@@ -222,7 +242,9 @@ class RoadmapBuilder(Node):
                 publisher.publish(grid_map)
             self.marker_pub.publish(roadmap_markers(roadmap, header.stamp))
         self.get_logger().info(
-            f"published the roadmap: {seg.n_regions} regions, {len(seg.patches)} patches, "
+            f"{'ready: ' if first else ''}published the roadmap on "
+            f"{self.roadmap_pub.topic_name} and {self.field_pub.topic_name}: "
+            f"{seg.n_regions} regions, {len(seg.patches)} patches, "
             f"{len(seg.gates)} gates, built in {built - start:.2f} s, messages packed in "
             f"{packed - built:.2f} s, published in {sent - packed:.2f} s")
 
@@ -240,4 +262,4 @@ class RoadmapBuilder(Node):
 def main(args=None):
     # So that release_free_memory reaches the memory of every thread.
     use_one_arena()
-    run(RoadmapBuilder, MultiThreadedExecutor, args)
+    run(RoadmapBuilder, MultiThreadedExecutor, args, usage=USAGE)

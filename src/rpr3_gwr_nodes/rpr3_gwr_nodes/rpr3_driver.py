@@ -93,7 +93,26 @@ from .profiles import BASE_FRAME, LATCHED_QOS, PASSIVE_JOINT_NAMES, STATE_QOS
 from .spin import run
 from .visualization import mechanism_markers, scene_markers
 
-__all__ = ["Rpr3Driver", "main"]
+__all__ = ["Rpr3Driver", "main", "USAGE"]
+
+USAGE = """\
+usage: ros2 run rpr3_gwr_nodes rpr3_driver [-h] [--ros-args ...]
+
+A simulated parallel mechanism (by default the paper's 3-RPR) that executes
+joint trajectories, following its platform by continuation, and aborts
+before a singularity, an assembly-mode change or a collision.
+
+Serves      execute_trajectory (rpr3_gwr_msgs/action/ExecuteTrajectory),
+            reset (rpr3_gwr_msgs/srv/ResetDriver)
+Subscribes  scene (latched)
+Publishes   joint_states, platform_pose, mechanism_markers, /diagnostics,
+            scene_markers, ~/current_scene
+Parameters  mechanism_file ('' for the paper's 3-RPR, read-only),
+            initial_configuration (joints then mode coordinate, read-only),
+            rate (100 Hz), time_scale (1.0), max_velocity (50 /s),
+            start_tolerance (1e-3), abort_margin (5e-4), warn_margin (0.02)
+Example     ros2 run rpr3_gwr_nodes rpr3_driver --ros-args -p time_scale:=10.0
+"""
 
 _Result = ExecuteTrajectory.Result
 _Reset = ResetDriver.Response
@@ -202,6 +221,12 @@ class Rpr3Driver(Node):
             self, ExecuteTrajectory, "execute_trajectory", self._execute,
             goal_callback=self._on_goal, cancel_callback=lambda _: CancelResponse.ACCEPT,
             callback_group=ReentrantCallbackGroup())
+        joints = ", ".join(f"{n} = {v:g}" for n, v in zip(names, self.rho))
+        self.get_logger().info(
+            f"ready: serving {self.resolve_service_name('execute_trajectory')} and "
+            f"{self.resolve_service_name('reset')}, publishing "
+            f"{self.joint_pub.topic_name} at {self.get_parameter('rate').value:g} Hz, at "
+            f"{joints}; following the scene on {self.resolve_topic_name('scene')}")
 
     # --- state -------------------------------------------------------------------------------
 
@@ -588,4 +613,4 @@ class Rpr3Driver(Node):
 
 
 def main(args=None):
-    run(Rpr3Driver, MultiThreadedExecutor, args, num_threads=4)
+    run(Rpr3Driver, MultiThreadedExecutor, args, usage=USAGE, num_threads=4)

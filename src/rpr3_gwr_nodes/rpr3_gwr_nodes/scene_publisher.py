@@ -22,7 +22,20 @@ from .conversions import scene_to_msg
 from .profiles import BASE_FRAME, LATCHED_QOS
 from .spin import run
 
-__all__ = ["ScenePublisher", "main"]
+__all__ = ["ScenePublisher", "main", "USAGE"]
+
+USAGE = """\
+usage: ros2 run rpr3_gwr_nodes scene_publisher [-h] [--ros-args ...]
+
+Publishes the scene (obstacles, strokes, passive ranges) of a scene file for
+the planner and the driver, latched; setting scene_file at run time
+publishes another, a bad file is refused with its reason.
+
+Publishes   scene (rpr3_gwr_msgs/msg/Scene, latched, frame base)
+Parameters  scene_file (YAML as config/scenes/*.yaml; '' publishes no scene)
+Example     ros2 run rpr3_gwr_nodes scene_publisher --ros-args \\
+                -p scene_file:=config/scenes/paper_narrowed.yaml
+"""
 
 
 class ScenePublisher(Node):
@@ -67,10 +80,10 @@ class ScenePublisher(Node):
     def _publish(self, scene, path):
         header = Header(stamp=self.get_clock().now().to_msg(), frame_id=BASE_FRAME)
         self.publisher.publish(scene_to_msg(scene, header))
-        self.get_logger().info(f"published the scene of {path}: "
+        self.get_logger().info(f"published the scene of {path} on {self.publisher.topic_name}: "
                                f"{len(scene.polygons) + len(scene.discs)} obstacle(s)"
-                               if path else "published no scene")
+                               if path else f"published no scene on {self.publisher.topic_name}")
 
 
 def main(args=None):
-    run(ScenePublisher, SingleThreadedExecutor, args)
+    run(ScenePublisher, SingleThreadedExecutor, args, usage=USAGE)

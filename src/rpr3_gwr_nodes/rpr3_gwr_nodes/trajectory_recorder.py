@@ -42,7 +42,24 @@ from visualization_msgs.msg import MarkerArray
 from .profiles import LATCHED_QOS, SENSOR_QOS
 from .spin import run
 
-__all__ = ["TrajectoryRecorder", "main"]
+__all__ = ["TrajectoryRecorder", "main", "USAGE"]
+
+USAGE = """\
+usage: ros2 run rpr3_gwr_nodes trajectory_recorder [-h] [--ros-args ...]
+
+Records the planner's trajectories (and, on request, the driver's joint
+states and the suite's markers) to a rosbag2 bag, flushed every
+flush_period and closed cleanly on SIGINT.
+
+Subscribes  planned_trajectory; joint_states with record_joint_states;
+            markers and field maps with record_visualization
+Parameters  bag_path (rpr3_gwr_bags/<date>_<time>, must not exist), storage
+            (sqlite3 or mcap), record_joint_states (false),
+            record_visualization (false), flush_period (0.5 s); all
+            read-only
+Example     ros2 run rpr3_gwr_nodes trajectory_recorder --ros-args \\
+                -p bag_path:=out/my_bag -p storage:=mcap
+"""
 
 _STORAGE = {"sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP}
 # Topic: (type, type name, QoS) of what record_visualization adds; latched
@@ -99,7 +116,7 @@ class TrajectoryRecorder(Node):
         opened.wait()
         for topic, (msg_type, _, qos) in topics.items():
             self.create_subscription(msg_type, topic, self._enqueue(topic), qos, raw=True)
-        self.get_logger().info(f"recording {sorted(topics)} to {self.bag_path}")
+        self.get_logger().info(f"ready: recording {sorted(topics)} to {self.bag_path}")
 
     def _write_loop(self, storage, topics, flush_period, opened):
         writer = Writer(self.bag_path, version=9, storage_plugin=storage)
@@ -170,4 +187,4 @@ def _make_durable(writer):
 
 
 def main(args=None):
-    run(TrajectoryRecorder, SingleThreadedExecutor, args)
+    run(TrajectoryRecorder, SingleThreadedExecutor, args, usage=USAGE)
