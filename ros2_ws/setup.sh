@@ -81,16 +81,18 @@ if [ "$(cat "$stamp" 2>/dev/null)" != "$inputs" ]; then
   else
     "$python" -m venv "$venv"
   fi
-  step "upgrading pip" "$venv/bin/python" -m pip install --quiet --upgrade pip
+  # pip runs with -qq: a machine's pip configuration may name index folders
+  # that do not exist, and pip would warn about each for every package.
+  step "upgrading pip" "$venv/bin/python" -m pip install -qq --upgrade pip
   if [ "$mode" = wheels ]; then
     step "installing the ROS 2 Jazzy wheels ($(grep -c '==' "$ws/requirements-ros.txt") pinned)" \
-      "$venv/bin/python" -m pip install --quiet -r "$ws/requirements-ros.txt"
+      "$venv/bin/python" -m pip install -qq -r "$ws/requirements-ros.txt"
   elif ! command -v colcon >/dev/null; then
-    step "installing colcon" "$venv/bin/python" -m pip install --quiet \
+    step "installing colcon" "$venv/bin/python" -m pip install -qq \
       "$(grep '^colcon-common-extensions==' "$ws/requirements-ros.txt")"
   fi
   step "installing the Python dependencies ($(grep -c '==' "$ws/requirements.txt") pinned)" \
-    "$venv/bin/python" -m pip install --quiet -r "$ws/requirements.txt"
+    "$venv/bin/python" -m pip install -qq -r "$ws/requirements.txt"
   echo "$inputs" > "$stamp"
   rm -f "$ws/.build-stamp"
 fi

@@ -46,6 +46,7 @@ if not os.environ.get("ROS_DOMAIN_ID"):
 
 import numpy as np  # noqa: E402
 import rclpy  # noqa: E402  (after the DDS environment is set)
+from rcl_interfaces.msg import Log  # noqa: E402
 from rcl_interfaces.srv import SetParameters  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from rclpy.wait_for_message import wait_for_message  # noqa: E402
@@ -255,8 +256,19 @@ def _full_roadmap(client):
         what="answer from /roadmap_builder/set_parameters")
     if not answer.results[0].successful:
         raise RuntimeError(f"the builder refused full: {answer.results[0].reason}")
-    client.wait_until_ready(timeout_sec=4 * TIMEOUT, newer_than=before)
+    # The build takes tens of seconds the first time: its progress, which
+    # the builder logs, is shown here as it comes.
+    relay = client.create_subscription(Log, "/rosout", _builder_progress, 100)
+    try:
+        client.wait_until_ready(timeout_sec=4 * TIMEOUT, newer_than=before)
+    finally:
+        client.destroy_subscription(relay)
     return _roadmap(client)
+
+
+def _builder_progress(entry):
+    if entry.name == "roadmap_builder" and entry.msg.startswith("  "):
+        print(f"  builder:{entry.msg}", flush=True)
 
 
 def main():

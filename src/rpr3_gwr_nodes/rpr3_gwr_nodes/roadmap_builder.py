@@ -33,6 +33,7 @@ It is published on the same topics; the maps and markers, drawn for 2-D
 grids, are not.
 """
 
+import math
 import time
 
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
@@ -78,6 +79,8 @@ Example     ros2 run rpr3_gwr_nodes roadmap_builder --ros-args -p fixed_value:=1
 """
 
 _GRID_PARAMETERS = ("fixed_value", "ranges", "step", "full")
+# Within a stage of a build, the log says where it stands this often [s].
+_PROGRESS_PERIOD = 2.0
 # The paper's slice: rho1 = 17.
 _PAPER_RHO1 = 17.0
 
@@ -208,9 +211,17 @@ class RoadmapBuilder(Node):
             self.get_logger().info(f"building the roadmap of the {self.mechanism.kind}: "
                                    f"{fixed}, {' x '.join(map(str, grid.shape))} cells")
         start = time.perf_counter()
+        logged = {"stage": None, "at": -math.inf}
 
         def progress(stage, fraction):
-            self.get_logger().info(f"  {fraction:4.0%} {stage}")
+            # A build reports dozens of times a second; its log says each
+            # stage once, then where it stands every few seconds.
+            now = time.perf_counter()
+            if stage == logged["stage"] and now - logged["at"] < _PROGRESS_PERIOD \
+                    and fraction < 1.0:
+                return
+            logged.update(stage=stage, at=now)
+            self.get_logger().info(f"  {fraction:4.0%} {stage} ({now - start:.1f} s)")
 
         try:
             if values["full"]:
