@@ -567,9 +567,9 @@ class Planner:
                     raise
                 break  # the blocked cells cut the patches
             joints, patches, cells = self._waypoints(s, g, local)
-            tried.append((joints, patches))
             result, kept = self._shortcut_validated(joints, patches, s, g, clearance, keep,
                                                     world)
+            tried.append((joints, patches, kept))
             if result.ok:
                 return result, joints[kept], patches[kept], _crossed(patches)
             k = self._failed_segment(result, joints[kept], patches[kept])
@@ -580,11 +580,13 @@ class Planner:
             around = self.local.cells_around(middle, 0.5 + repair).tolist()
             blocked.update(set(around + [cells[a], cells[b]]) - {s.cell, g.cell, -1})
         # Blocking steps can also lead somewhere worse: the last path, else
-        # the first, if it keeps min_margin.
-        for joints, patches in (tried[-1], tried[0])[:len(tried)]:
-            result = self._validate(joints, s, g, self.min_margin, world)
-            if result.ok:
-                break
+        # the first, if it keeps min_margin, shortcut as it was tried (it
+        # missed only the clearance's quarter), else whole.
+        for joints, patches, kept in (tried[-1], tried[0])[:len(tried)]:
+            for waypoints in (kept, np.arange(len(joints))):
+                result = self._validate(joints[waypoints], s, g, self.min_margin, world)
+                if result.ok:
+                    return result, joints[waypoints], patches[waypoints], _crossed(patches)
         return result, joints, patches, _crossed(patches)
 
     def _shortcut_validated(self, joints, patches, s, g, clearance, keep, world=None):
