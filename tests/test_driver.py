@@ -6,7 +6,6 @@ in the test's thread."""
 
 import collections
 import math
-import threading
 import time
 
 import numpy as np
@@ -15,20 +14,21 @@ import yaml
 from builtin_interfaces.msg import Duration
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from hypothesis import HealthCheck, given, settings, strategies as st
-from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rpr3_gwr_core.mechanisms.rpr3 import ThreeRPR
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import Configuration, PlatformPose
 from rpr3_gwr_msgs.srv import ResetDriver
-from rpr3_gwr_nodes.client import PlannerClient
 from rpr3_gwr_nodes.profiles import SENSOR_QOS
 from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
 from rpr3_gwr_nodes.rpr3_driver import Rpr3Driver
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from visualization_msgs.msg import MarkerArray
+
+from spun_nodes import SpunNodes
 
 D = math.radians
 Q1 = (17.0, 12.0, 18.0, D(122.82))
@@ -59,7 +59,7 @@ def _line(start, end, seconds, n=21):
     return _trajectory(points, [_stamp(seconds * k) for k in t])
 
 
-class DriverUnderTest:
+class DriverUnderTest(SpunNodes):
     def __init__(self, context):
         self.driver = Rpr3Driver(context=context, parameter_overrides=[
             Parameter("time_scale", value=20.0), Parameter("rate", value=100.0)])
@@ -68,12 +68,7 @@ class DriverUnderTest:
         self.diagnostics = []
         self.listener.create_subscription(DiagnosticArray, "/diagnostics",
                                           self.diagnostics.append, 10)
-        self.executor = MultiThreadedExecutor(num_threads=4, context=context)
-        for node in (self.driver, self.listener):
-            self.executor.add_node(node)
-        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
-        self.thread.start()
-        self.client = PlannerClient("driver_test_client", context=context)
+        super().__init__(context, (self.driver, self.listener), "driver_test_client")
 
     def reset(self, configuration, names=()):
         c = Configuration(joint_names=list(names), positions=list(configuration[:-1]),
@@ -93,13 +88,6 @@ class DriverUnderTest:
             time.sleep(0.02)
         assert len(self.diagnostics) > since, "no diagnostics published"
         return self.diagnostics[since].status[0].level
-
-    def close(self):
-        self.client.destroy_node()
-        self.executor.shutdown(timeout_sec=10.0)
-        self.thread.join(timeout=10.0)
-        self.listener.destroy_node()
-        self.driver.destroy_node()
 
 
 @pytest.fixture(scope="module")

@@ -8,19 +8,16 @@ PlannerClient spinning itself in the test's thread."""
 
 import math
 import pathlib
-import threading
 import time
 
 import numpy as np
 import pytest
 import yaml
-from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import Configuration
 from rpr3_gwr_msgs.srv import PlanPath
-from rpr3_gwr_nodes.client import PlannerClient
 from rpr3_gwr_nodes.planner import PlannerNode
 from rpr3_gwr_nodes.profiles import SENSOR_QOS
 from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
@@ -29,6 +26,8 @@ from sensor_msgs.msg import JointState
 from visualization_msgs.msg import MarkerArray
 
 from moving_base_reference import MovingBaseReference, wrap
+
+from spun_nodes import SpunNodes
 
 CONFIG = pathlib.Path(__file__).resolve().parents[1] / "config"
 THREE_RRR, FIVE_BAR = CONFIG / "three_rrr.yaml", CONFIG / "five_bar.yaml"
@@ -69,7 +68,7 @@ def _densified(joints, largest):
     return np.array(dense), waypoints
 
 
-class Suite:
+class Suite(SpunNodes):
     """Builder, planner and (optionally) driver on one mechanism file, in a
     namespace of their own, a listener of the driver's streams and a client."""
 
@@ -91,25 +90,12 @@ class Suite:
                                      SENSOR_QOS)
         listener.create_subscription(MarkerArray, "mechanism_markers", self.markers.append,
                                      SENSOR_QOS)
-        self.executor = MultiThreadedExecutor(num_threads=4, context=context)
-        for node in self.nodes:
-            self.executor.add_node(node)
-        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
-        self.thread.start()
-        self.client = PlannerClient("mechanism_test_client", context=context,
-                                    namespace=namespace)
+        super().__init__(context, self.nodes, "mechanism_test_client", namespace=namespace)
         assert self.planner.ready.wait(TIMEOUT), "the planner got no roadmap"
         self.client.wait_until_ready(timeout_sec=TIMEOUT)
 
     def plan(self, start, goal, smooth=False, **options):
         return self.client.plan(start, goal, smooth=smooth, timeout_sec=TIMEOUT, **options)
-
-    def close(self):
-        self.client.destroy_node()
-        self.executor.shutdown(timeout_sec=10.0)
-        self.thread.join(timeout=10.0)
-        for node in reversed(self.nodes):
-            node.destroy_node()
 
 
 @pytest.fixture

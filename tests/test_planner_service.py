@@ -8,13 +8,11 @@ import collections
 import math
 import os
 import signal
-import threading
 import time
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
-from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID
@@ -22,7 +20,6 @@ from rpr3_gwr_core.planning import Planner
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
 from rpr3_gwr_msgs.msg import Configuration, NSolutionField, WorkspaceRoadmap
 from rpr3_gwr_msgs.srv import PlanPath
-from rpr3_gwr_nodes.client import PlannerClient
 from rpr3_gwr_nodes.conversions import roadmap_to_msgs
 from rpr3_gwr_nodes.planner import PlannerNode
 from rpr3_gwr_nodes.profiles import LATCHED_QOS
@@ -31,6 +28,8 @@ from visualization_msgs.msg import MarkerArray
 
 from pose_reference import follow, legs_of
 from process_tree import children, wait_for_children
+
+from spun_nodes import SpunNodes
 
 D = math.radians
 Q1, Q2 = (17.0, 12.0, 18.0, D(122.82)), (17.0, 10.0, 25.0, D(-24.24))
@@ -57,7 +56,7 @@ def _joints(configuration):
     return [by_name[name] for name in NAMES]
 
 
-class PlannerUnderTest:
+class PlannerUnderTest(SpunNodes):
     """A planner node fed the paper's roadmap messages by a feeder node that
     also listens to its path markers, and a client."""
 
@@ -73,12 +72,8 @@ class PlannerUnderTest:
         self.path_markers = []
         self.feeder.create_subscription(MarkerArray, "planned_path_markers",
                                         self.path_markers.append, 10)
-        self.executor = MultiThreadedExecutor(num_threads=4, context=context)
-        for node in (self.planner, self.feeder):
-            self.executor.add_node(node)
-        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
-        self.thread.start()
-        self.client = PlannerClient("planner_test_client", context=context, namespace=namespace)
+        super().__init__(context, (self.planner, self.feeder), "planner_test_client",
+                         namespace=namespace)
         assert self.planner.ready.wait(60.0), "the planner got no roadmap"
         assert self.planner.indexed.wait(120.0), "the planner's workers did not start"
         self.client.wait_until_ready(timeout_sec=TIMEOUT)
@@ -97,13 +92,6 @@ class PlannerUnderTest:
         """The limits that time requests without their own."""
         return tuple(self.planner.get_parameter(name).value
                      for name in ("default_max_velocity", "default_max_acceleration"))
-
-    def close(self):
-        self.client.destroy_node()
-        self.executor.shutdown(timeout_sec=10.0)
-        self.thread.join(timeout=10.0)
-        for node in (self.feeder, self.planner):
-            node.destroy_node()
 
 
 @pytest.fixture(scope="module")

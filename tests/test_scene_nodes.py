@@ -26,7 +26,6 @@ from rpr3_gwr_core.world import configuration_collision, load_scene, scene_from_
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import JointRange, Obstacle, Scene
 from rpr3_gwr_msgs.srv import PlanPath
-from rpr3_gwr_nodes.client import PlannerClient
 from rpr3_gwr_nodes.conversions import scene_from_msg, scene_to_msg
 from rpr3_gwr_nodes.profiles import LATCHED_QOS
 from rpr3_gwr_nodes.rpr3_driver import Rpr3Driver
@@ -37,6 +36,8 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from test_planner_service import PlannerUnderTest, check_sound, TIMEOUT
 from test_world_reference import reference_blocked, reference_track, torus_platform
+
+from spun_nodes import SpunNodes
 
 D = math.radians
 Q1, Q2 = (17.0, 12.0, 18.0, D(122.82)), (17.0, 10.0, 25.0, D(-24.24))
@@ -249,7 +250,7 @@ def test_a_scene_published_before_the_roadmap_is_planned_in(ros_context):
 
 # --- the driver ------------------------------------------------------------------------------
 
-class DriverRig:
+class DriverRig(SpunNodes):
     """A driver (from Q1, the paper's start) in a namespace of its own, its
     scene feed, and listeners of its state and markers."""
 
@@ -266,23 +267,11 @@ class DriverRig:
                 (MarkerArray, "mechanism_markers", self.markers, 10),
                 (MarkerArray, "scene_markers", self.obstacles, LATCHED_QOS)):
             self.listener.create_subscription(kind, topic, store.append, qos)
-        self.executor = MultiThreadedExecutor(num_threads=4, context=context)
-        for node in (self.driver, self.listener):
-            self.executor.add_node(node)
-        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
-        self.thread.start()
-        self.client = PlannerClient("scene_driver_client", context=context,
-                                    namespace="scene_driver")
+        super().__init__(context, (self.driver, self.listener), "scene_driver_client",
+                         namespace="scene_driver")
 
     def execute(self, trajectory):
         return self.client.execute(trajectory, timeout_sec=120.0).result
-
-    def close(self):
-        self.client.destroy_node()
-        self.executor.shutdown(timeout_sec=10.0)
-        self.thread.join(timeout=10.0)
-        self.listener.destroy_node()
-        self.driver.destroy_node()
 
 
 @pytest.fixture(scope="module")
