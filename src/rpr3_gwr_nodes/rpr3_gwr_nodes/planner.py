@@ -312,17 +312,20 @@ class PlannerNode(Node):
         # One reference assignment: atomic for the service threads, and a
         # request keeps the state it started with.
         previous, self._state = self._state, _State(planner, roadmap.header.stamp, world=world)
+        # Set with the state, not after the logs: a request answered from the
+        # new roadmap comes from a ready planner.
+        first = not self.ready.is_set()
+        self.ready.set()
+        self.indexed.clear()
         self._echo_scene()
         stamp = roadmap.header.stamp
         self.get_logger().info(
             f"planning on a new roadmap (stamp {stamp.sec}.{stamp.nanosec:09d}): "
             f"{_describe(planner.roadmap)}, {len(planner.roadmap.graph)} patches, ready in "
             f"{time.perf_counter() - start:.3f} s")
-        self.indexed.clear()
-        if not self.ready.is_set():
+        if first:
             self.get_logger().info(f"ready: serving {self.resolve_service_name('plan_path')} on "
                                    f"a roadmap of {_describe(planner.roadmap)}")
-        self.ready.set()
         if previous is not None and previous.workers is not None:
             previous.workers.close()
         # The replaced state goes here, unless a request in flight still
