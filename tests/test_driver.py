@@ -185,7 +185,18 @@ def test_subscribers_with_the_default_qos_get_the_driver_state(rig):
         executor.shutdown()
         listener.destroy_node()
     assert len(got) == 4, f"only {sorted(got)} arrived"
-    assert got["joint_states"][-1].name == NAMES + ["theta1", "theta2", "theta3"]
+    state = got["joint_states"][-1]
+    passive = ["base1", "base2", "base3", "platform1", "platform2", "platform3"]
+    assert state.name == NAMES + passive
+    # At rest, so the last pose is the state's.  B1 is the pose's point and
+    # A1 the origin: leg 1's direction, and relative to the platform.
+    message = got["platform_pose"][-1]
+    pose = dict(zip(message.names, message.values))
+    base1 = math.atan2(pose["y"], pose["x"])
+    values = dict(zip(state.name, state.position))
+    assert values["base1"] == pytest.approx(base1, abs=1e-9)
+    assert math.cos(values["platform1"] - (base1 - pose["alpha"])) == pytest.approx(1.0, abs=1e-12)
+    assert all(math.isnan(v) for v in state.velocity[len(NAMES):])
 
 
 def test_a_second_goal_is_rejected_while_one_executes(rig):

@@ -162,12 +162,23 @@ def test_the_three_rrr_changes_assembly_mode_through_the_nodes(three_rrr):
     assert result.min_singularity_margin > 1e-3
     # Its joint states carry the 3-RRR's joints; its markers draw each leg
     # from its base joint through its elbow to the platform.
+    # Two of each after the result: both drawn at rest.
+    streams = three_rrr.joint_states, three_rrr.markers
+    wanted = [len(stream) + 2 for stream in streams]
     deadline = time.monotonic() + 10.0
-    while not (three_rrr.joint_states and three_rrr.markers) and time.monotonic() < deadline:
+    while any(len(s) < n for s, n in zip(streams, wanted)) and time.monotonic() < deadline:
         time.sleep(0.05)
-    assert list(three_rrr.joint_states[-1].name) == TH_NAMES
+    state = three_rrr.joint_states[-1]
+    assert list(state.name) == TH_NAMES + [f"{joint}{i}" for joint in ("elbow", "platform")
+                                           for i in (1, 2, 3)]
     legs = {m.ns: m for m in three_rrr.markers[-1].markers}["legs"]
     segments = np.array([[p.x, p.y] for p in legs.points]).reshape(3, 2, 2, 2)
+    # At rest, the elbows the joint states give are the angles between the
+    # drawn proximal and distal links.
+    direction = segments[:, :, 1] - segments[:, :, 0]
+    angle = np.arctan2(direction[..., 1], direction[..., 0])
+    np.testing.assert_allclose(wrap(np.array(state.position[3:6]) - (angle[:, 1] - angle[:, 0])),
+                               0.0, atol=1e-9)
     np.testing.assert_allclose(segments[:, 0, 0], _A)
     np.testing.assert_allclose(segments[:, 0, 1], segments[:, 1, 0])
     np.testing.assert_allclose(np.linalg.norm(segments[:, 0, 1] - _A, axis=1), _RRR["l1"])

@@ -184,7 +184,8 @@ def test_whole_chain_plan_execute_record(suite):
     moving = suite.joint_states[before:]
     # Best effort, like any sensor stream: under load some may be dropped.
     assert len(moving) >= 3
-    assert list(moving[-1].name) == ["rho1", "rho2", "rho3", "theta1", "theta2", "theta3"]
+    assert list(moving[-1].name) == ["rho1", "rho2", "rho3", "base1", "base2", "base3",
+                                      "platform1", "platform2", "platform3"]
     # The recorder wrote what the planner published; close the bag and read it.
     sent = [list(p.positions) for p in response.trajectory.points]
     suite.executor.remove_node(suite.recorder)

@@ -1,12 +1,10 @@
 """What the suite's nodes share, as nav2's ``qos_profiles``: the QoS of each
-kind of topic, the 3-RPR's passive joint names and the frame of the
-mechanism's base."""
+kind of topic and the frame of the mechanism's base."""
 
 from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy,
                        qos_profile_sensor_data)
 
-__all__ = ["LATCHED_QOS", "STATE_QOS", "SENSOR_QOS", "SERVICE_QOS", "PASSIVE_JOINT_NAMES",
-           "BASE_FRAME"]
+__all__ = ["LATCHED_QOS", "STATE_QOS", "SENSOR_QOS", "SERVICE_QOS", "BASE_FRAME"]
 
 # Maps, roadmaps and scenes (and the scene each node applies), as nav2's map
 # server: the latest one, to late joiners too (subscribers use the same
@@ -37,8 +35,5 @@ STATE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
 # Readers of those streams that would rather skip a sample than wait for its
 # resend (the recorder): best effort matches a reliable writer too.
 SENSOR_QOS = qos_profile_sensor_data
-# The 3-RPR's passive revolute joints at the base, the legs' directions
-# (the actuated joints are the mechanism's joint_names).
-PASSIVE_JOINT_NAMES = ["theta1", "theta2", "theta3"]
 # The frame of the base points A1..A3 and of every pose.
 BASE_FRAME = "base"

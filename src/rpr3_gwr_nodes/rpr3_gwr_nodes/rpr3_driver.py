@@ -10,8 +10,10 @@ mode unless a singularity is crossed.
   joint_state_broadcaster's, so that readers of any reliability get them,
   ``rate`` Hz): the actuated joints by the mechanism's names (positions and
   velocities; a joint that turns fully counts its turns, as a continuous
-  joint), then the passive joints the core gives (the 3-RPR's leg
-  directions theta1..theta3);
+  joint), then the passive joints by the names of the mechanism's bodies
+  (:meth:`Mechanism.body_outline`, the names a scene's passive ranges
+  use: the 3-RPR's ``base1..3`` and ``platform1..3``, the elbows of the
+  3-RRR, the 3-PRR and the five-bar), positions only (velocity NaN);
 * ``platform_pose`` (rpr3_gwr_msgs/PlatformPose, same rate and QoS);
 * ``mechanism_markers`` (visualization_msgs/MarkerArray, same rate, stamp
   and QoS as the joint states, frame ``base``): base points, legs (with
@@ -89,7 +91,7 @@ from visualization_msgs.msg import MarkerArray
 from .conversions import (configuration_from_msg, duration_msg, is_empty_scene, pose_msg,
                           scene_from_msg, scene_to_msg)
 from .mechanism_parameters import box_middle, declare_mechanism
-from .profiles import BASE_FRAME, LATCHED_QOS, PASSIVE_JOINT_NAMES, STATE_QOS
+from .profiles import BASE_FRAME, LATCHED_QOS, STATE_QOS
 from .spin import run
 from .visualization import mechanism_markers, scene_markers
 
@@ -303,12 +305,10 @@ class Rpr3Driver(Node):
         names = list(self.mechanism.joint_names)
         position = [float(v) for v in rho]
         speed = [float(v) for v in velocity]
-        # Of the passive joints, the core gives the 3-RPR's leg directions.
-        passive = getattr(self.mechanism, "passive_angles", None)
-        if passive is not None:
-            names += PASSIVE_JOINT_NAMES
-            position += [float(v) for v in passive(pose)]
-            speed += [math.nan] * len(PASSIVE_JOINT_NAMES)
+        for name, angle in self._passive_joints(pose, rho):
+            names.append(name)
+            position.append(float(angle))
+            speed.append(math.nan)
         msg.name, msg.position, msg.velocity = names, position, speed
         self.joint_pub.publish(msg)
         self.pose_pub.publish(pose_msg(self.mechanism, pose))
@@ -318,6 +318,14 @@ class Rpr3Driver(Node):
             self.mechanism, pose, rho, margin, self.get_parameter("warn_margin").value,
             self.get_parameter("abort_margin").value, msg.header.stamp,
             None if collision is None else collision.body))
+
+    def _passive_joints(self, pose, joints):
+        """``(name, angle [rad])`` of each passive joint; none for a
+        mechanism that does not describe its bodies."""
+        try:
+            return self.mechanism.body_outline(pose, joints)[2]
+        except NotImplementedError:
+            return []
 
     def diagnostic_status(self):
         """The singularity status (the module doc gives its levels)."""
