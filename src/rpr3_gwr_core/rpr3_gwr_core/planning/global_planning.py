@@ -78,12 +78,14 @@ class RoadmapIndex:
         self.aspect = nx.get_node_attributes(self.graph, "aspect")
         seg = roadmap.segmentation
         grid = seg.field.grid
-        coords = grid.coordinates()
-        self.centroid = {pid: coords[p.cells].mean(axis=0) for pid, p in seg.patches.items()}
+        # The cells' coordinates patch by patch: those of the whole grid
+        # would be a temporary of a quarter gigabyte on the full roadmap.
+        self.centroid = {pid: grid.coordinates_of(p.cells).mean(axis=0)
+                         for pid, p in seg.patches.items()}
         self.weighted = nx.Graph()
         self.weighted.add_nodes_from(self.graph.nodes)
         for (a, b), gate in seg.gates.items():
-            middle = coords[gate.faces.ravel()].mean(axis=0)
+            middle = grid.coordinates_of(gate.faces.ravel()).mean(axis=0)
             cost = (np.linalg.norm(self.centroid[a] - middle)
                     + np.linalg.norm(middle - self.centroid[b])
                     + narrow_penalty * float(np.prod(grid.steps)) / gate.width)

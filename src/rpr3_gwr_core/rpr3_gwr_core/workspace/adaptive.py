@@ -137,21 +137,28 @@ class AdaptiveGrid(GridBase):
     def _sample_points(self):
         """Fine flat index of every cell, ascending."""
         r = self.refinement
-        taken = np.zeros(self.fine_shape, dtype=bool)
+        refined = np.zeros(self.block_shape, dtype=bool)
+        refined.reshape(-1)[self.blocks] = True
+        # A block's points but those of its far faces: the blocks repeated r
+        # times along every axis (the far end of a bounded axis left empty).
+        taken = refined
+        for axis in range(self.ndim):
+            taken = np.repeat(taken, r, axis=axis)
+        taken = np.pad(taken, [(0, f - t) for f, t in zip(self.fine_shape, taken.shape)])
+        # Then the far faces, axis by axis: a point on a multiple of r is also
+        # of the block before it, as is a periodic axis' first point of its
+        # last block.
+        for axis, periodic in enumerate(self._periodic):
+            along = np.moveaxis(taken, axis, 0)
+            if periodic:
+                along[::r] |= np.roll(along[r - 1::r], 1, axis=0)
+            else:
+                along[r::r] |= along[r - 1::r]
         taken[tuple(slice(None, None, r) for _ in self.fine_shape)] = True
-        corner = np.stack(np.unravel_index(self.blocks, self.block_shape), axis=1) * r
-        offsets = lattice_box(self.ndim, 0, r)
-        flat = taken.reshape(-1)
-        # Blocks in chunks: a block brings (r + 1)**d points.
-        for start in range(0, len(corner), 4096):
-            inside = (corner[start:start + 4096, None, :] + offsets[None]).reshape(-1, self.ndim)
-            # A block past a periodic axis' last base point ends at its first.
-            inside = np.where(self._periodic, inside % np.array(self.fine_shape), inside)
-            flat[np.ravel_multi_index(tuple(inside.T), self.fine_shape)] = True
-        size = int(np.count_nonzero(flat))
+        size = int(np.count_nonzero(taken))
         if size > MAX_GRID_CELLS:
             raise InvalidInputError(f"grid of {size} cells exceeds the limit of {MAX_GRID_CELLS}")
-        return np.flatnonzero(flat)
+        return np.flatnonzero(taken)
 
     def __eq__(self, other):
         return (isinstance(other, AdaptiveGrid) and other.base == self.base
