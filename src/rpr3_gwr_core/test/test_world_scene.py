@@ -267,3 +267,34 @@ def test_crowded_solutions_lie_within_twice_the_clearance(coarse_world):
     assert near.crowded.any()
     assert np.array_equal(near.crowded, near.free & ~wide.free)
     assert not world.apply(scene_from_dict({"obstacles": [post]})).crowded.any()
+
+
+def test_the_scene_index_moves_to_the_mapped_roadmap_without_the_first(tmp_path):
+    import gc
+    import weakref
+
+    from rpr3_gwr_core.io.cache import map_planning_files, save_planning_files
+    from rpr3_gwr_core.planning import Planner
+
+    roadmap = build_roadmap(PAPER_GEOMETRY, rho1_slice(step=0.5))
+    first = Planner(roadmap)
+    scene = scene_from_dict({"obstacles": [{"id": 1, "disc": {"center": [5.0, 30.0],
+                                                              "radius": 2.0}}]})
+    world = first.apply_scene(scene)
+    save_planning_files(str(tmp_path), roadmap, first.planning_index)
+    mapped = Planner(*map_planning_files(str(tmp_path)))
+    mapped.adopt_scene_indices(first)
+    moved = mapped.apply_scene(scene)
+    # Not computed again: the same boxes, on the mapped roadmap's arrays.
+    assert moved.index.boxes is world.index.boxes
+    assert moved.index.roadmap is mapped.roadmap
+    assert moved.n_parts == world.n_parts
+    assert np.array_equal(moved.free, world.free)
+    assert sorted(moved.graph.edges) == sorted(world.graph.edges)
+    coarser = build_roadmap(PAPER_GEOMETRY, rho1_slice(step=1.0))
+    with pytest.raises(InvalidInputError, match="equal roadmap"):
+        world.index.on_roadmap(coarser)
+    received = weakref.ref(roadmap)
+    del roadmap, first, world
+    gc.collect()
+    assert received() is None

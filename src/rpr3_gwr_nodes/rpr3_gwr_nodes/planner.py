@@ -362,7 +362,14 @@ class PlannerNode(Node):
                                         f"{exc!r}")
         if state is None:
             state = _State(Planner(roadmap, index, retries=self._retries), stamp)
-        # The scene's index is the planner's: this planner needs its own.
+        # A scene is applied to this planner's roadmap (the mapped one, with
+        # workers), with what the first planner computed for scenes on it:
+        # seconds on a full roadmap.
+        try:
+            state.planner.adopt_scene_indices(self._state.planner)
+        except GWRError as exc:  # the scene's index is then computed again
+            self.get_logger().error(f"the scene index does not move to the indexed roadmap: "
+                                    f"{exc}")
         state.world = self._world_for(state.planner)
         # Updates are mutually exclusive: no other roadmap came meanwhile.
         # With workers, the node's planner reads the mapped files too, and

@@ -741,6 +741,24 @@ class Planner:
             index = self._world_indices[key] = WorldIndex(self.roadmap, model)
         return index.apply(scene)
 
+    def adopt_scene_indices(self, other):
+        """Take what :meth:`apply_scene` computed once per body model on
+        another planner of an equal roadmap (for example the roadmap
+        received, before this planner mapped it from its planning files),
+        so that scenes applied here do not compute it again.
+
+        Parameters
+        ----------
+        other : Planner
+
+        Raises
+        ------
+        InvalidInputError
+            If the other planner's roadmap differs from this one's.
+        """
+        for key, index in other._world_indices.items():
+            self._world_indices.setdefault(key, index.on_roadmap(self.roadmap))
+
     def _waypoints(self, s, g, local):
         """Exact start, the cell centres, exact goal; repeated points dropped;
         continuous along periodic axes (from the start's values, so the goal's

@@ -14,6 +14,7 @@ exactly when their parts are in one connected component of that graph, so a
 "no path" stays exact on the grid.
 """
 
+import copy
 import dataclasses
 from dataclasses import dataclass
 import functools
@@ -80,17 +81,12 @@ class WorldIndex:
     """
 
     def __init__(self, roadmap, model=None):
-        self.roadmap = roadmap
         self.model = model
+        self._read(roadmap)
         mechanism = roadmap.mechanism
-        segmentation = roadmap.segmentation
-        field = segmentation.field
-        self._width = field.max_solutions
-        self._patch = np.ascontiguousarray(segmentation.patch.ravel())
+        self._width = roadmap.segmentation.field.max_solutions
         self.disks = np.flatnonzero(self._patch > 0)
-        self._joints = field.grid.joints()
-        self._poses = field.poses.reshape(-1, mechanism.pose_size)
-        self._links = segmentation.links
+        self._joints = roadmap.segmentation.field.grid.joints()
         self.boxes = np.empty((self.disks.size, 4), dtype=np.float32)
         self.interfering = np.zeros(self.disks.size, dtype=bool)
         sample = self._bodies(self.disks[:1])
@@ -120,6 +116,45 @@ class WorldIndex:
             for node in nodes:
                 self._component[node] = label
         self._aspect = nx.get_node_attributes(roadmap.graph, "aspect")
+
+    def _read(self, roadmap):
+        """Refer to the roadmap's arrays (those of the field and the
+        segmentation the index reads, not copies)."""
+        self.roadmap = roadmap
+        segmentation = roadmap.segmentation
+        self._patch = np.ascontiguousarray(segmentation.patch.ravel())
+        self._poses = segmentation.field.poses.reshape(-1, roadmap.mechanism.pose_size)
+        self._links = segmentation.links
+
+    def on_roadmap(self, roadmap):
+        """This index on an equal roadmap, without computing it again.
+
+        What the index computed is shared; the roadmap's own arrays are
+        read from ``roadmap`` (for example the same roadmap mapped from
+        planning files), so the index keeps no reference to this one's.
+
+        Parameters
+        ----------
+        roadmap : Roadmap
+            Of the same mechanism, grid and patches.
+
+        Returns
+        -------
+        WorldIndex
+
+        Raises
+        ------
+        InvalidInputError
+            If ``roadmap`` differs from this index's in its mechanism, its
+            grid or its patch array.
+        """
+        if (roadmap.mechanism.to_dict() != self.roadmap.mechanism.to_dict()
+                or roadmap.grid != self.roadmap.grid
+                or not np.array_equal(roadmap.segmentation.patch.ravel(), self._patch)):
+            raise InvalidInputError("a world index moves only to an equal roadmap")
+        moved = copy.copy(self)
+        moved._read(roadmap)
+        return moved
 
     def _bodies(self, disks):
         return self.roadmap.mechanism.bodies(self._poses[disks],
