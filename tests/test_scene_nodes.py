@@ -446,3 +446,24 @@ def test_the_nodes_serve_after_the_malformed_scenes(rig, driver_rig):
     assert rig.plan(Q1, Q2).success
     echo = driver_rig.scenes.apply(_scene_msg(_document("paper_narrowed")))
     assert {o.id for o in echo.obstacles} == {"post", "plate"}
+
+
+def test_a_mechanism_file_with_legs_in_one_layer_keeps_them_apart_without_a_scene(
+        module_context, tmp_path):
+    # The paper's 3-RPR, its legs in one layer: at the first example's goal
+    # legs 1 and 3 cross (the core's reference test measures it).
+    document = yaml.safe_load((SCENES.parent / "paper_3rpr.yaml").read_text())
+    document["bodies"] = {"leg_layers": [1, 1, 1]}
+    path = tmp_path / "coplanar_3rpr.yaml"
+    path.write_text(yaml.safe_dump(document))
+    running = PlannerUnderTest(module_context, "coplanar_rig", parameter_overrides=[
+        Parameter("plan_workers", value=1), Parameter("mechanism_file", value=str(path))])
+    try:
+        response = running.plan(Q1, Q2)
+        assert response.error_code == PlanPath.Response.ERROR_IN_COLLISION, response.error_msg
+        assert "goal" in response.error_msg and "leg1" in response.error_msg \
+            and "leg3" in response.error_msg
+        # Its first example's reverse, from the same goal: the same answer.
+        assert running.plan(Q2, Q1).error_code == PlanPath.Response.ERROR_IN_COLLISION
+    finally:
+        running.close()

@@ -10,8 +10,9 @@ import math
 from rcl_interfaces.msg import ParameterDescriptor
 from rpr3_gwr_core.io.mechanism_file import load_mechanism_file, mechanism_file_from_dict
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID
+from rpr3_gwr_core.world import EMPTY_SCENE
 
-__all__ = ["declare_mechanism", "PAPER_MECHANISM_FILE", "box_middle"]
+__all__ = ["declare_mechanism", "PAPER_MECHANISM_FILE", "box_middle", "kept_scene"]
 
 # The paper's 3-RPR on its legs' box, every leg sampled as the paper's
 # slice samples rho2 and rho3 (config/paper_3rpr.yaml).
@@ -46,3 +47,12 @@ def box_middle(axis):
     if axis.periodic:
         return 0.0
     return axis.low + axis.step * math.floor((axis.high - axis.low) / (2 * axis.step))
+
+
+def kept_scene(scene, bodies):
+    """The scene plans and executions keep: the one received, else, with a
+    mechanism file's ``bodies``, an empty one, since bodies that share a
+    layer must not cross even without obstacles (None: nothing to keep)."""
+    if scene is None and bodies is not None:
+        return EMPTY_SCENE
+    return scene

@@ -26,8 +26,10 @@ response's error code and message, anything else ``ERROR_INTERNAL``, and the
 node never dies on a request.  The mechanism comes with the roadmap
 messages: requests give its joints (by name, or in its order) and mode
 coordinate, and trajectories carry its joint names.  With ``mechanism_file``
-(read-only, as the builder's) roadmaps of another mechanism are ignored;
-empty (the default), any mechanism is planned on.  Each response names the
+(read-only, as the builder's) roadmaps of another mechanism are ignored
+and scenes are checked with the file's ``bodies`` (widths and layers: legs
+in one layer may not cross); empty (the default), any mechanism is planned
+on, each leg in a layer of its own.  Each response names the
 roadmap that answered it (its stamp and the joints it fixes).  Each planned
 trajectory is also published on ``planned_trajectory``
 (trajectory_msgs/JointTrajectory) for recording, and drawn on
@@ -78,6 +80,7 @@ from visualization_msgs.msg import MarkerArray
 
 from .conversions import (MAX_DURATION, configuration_from_msg, duration_msg, is_empty_scene,
                           pose_msg, roadmap_from_msgs, scene_from_msg, scene_to_msg)
+from .mechanism_parameters import kept_scene
 from .memory import release_free_memory, use_one_arena
 from .plan_workers import PlanWorkers, WorkerFailed, WorkersClosed
 from .profiles import BASE_FRAME, LATCHED_QOS, SERVICE_QOS
@@ -233,7 +236,11 @@ class PlannerNode(Node):
                         "mechanism are ignored with an error; empty, the planner plans on the "
                         "mechanism each roadmap carries", read_only=True))
         path = self.get_parameter("mechanism_file").value
-        self.mechanism = load_mechanism_file(path).mechanism if path else None
+        described = load_mechanism_file(path) if path else None
+        self.mechanism = None if described is None else described.mechanism
+        # The widths and layers of the bodies a scene is checked with: the
+        # file's, else the defaults (each leg in a layer of its own).
+        self.bodies = None if described is None else described.bodies
         self._state = None
         self._messages = {}
         # The scene each new roadmap is restricted to, and the header stamp it
@@ -385,10 +392,11 @@ class PlannerNode(Node):
         """The current scene applied to a new roadmap's planner, or None
         without a scene; a scene that does not fit the new roadmap is
         dropped (logged and echoed as no scene)."""
-        if self._scene is None:
+        scene = kept_scene(self._scene, self.bodies)
+        if scene is None:
             return None
         try:
-            return planner.apply_scene(self._scene)
+            return planner.apply_scene(scene, self.bodies)
         except Exception as exc:  # a bug there must not take the node down either
             self.refused_scenes += 1
             self.get_logger().error(f"dropping the scene, which does not fit the new roadmap, "
@@ -405,7 +413,9 @@ class PlannerNode(Node):
                 scene = None
             state = self._state
             # Until a roadmap comes, the scene waits for it (_world_for).
-            world = None if scene is None or state is None else state.planner.apply_scene(scene)
+            kept = kept_scene(scene, self.bodies)
+            world = None if kept is None or state is None else state.planner.apply_scene(
+                kept, self.bodies)
         except Exception as exc:  # GWRError: a bad scene; anything else a bug
             self.refused_scenes += 1
             self.get_logger().error(f"refusing a scene, planning on in the previous one: "

@@ -1,7 +1,9 @@
 """rpr3_driver: a simulated parallel mechanism that replays joint trajectories.
 
 The mechanism is its ``mechanism_file`` (:mod:`.mechanism_parameters`, the
-builder's; the paper's 3-RPR by default).  Like the real mechanism, the
+builder's; the paper's 3-RPR by default), whose ``bodies`` (widths and
+layers) scenes are checked with: with them, bodies that share a layer are
+kept apart even without a scene.  Like the real mechanism, the
 platform follows the commanded joints by continuation of the constraint
 equations (it is never looked up in a table), so it stays in its assembly
 mode unless a singularity is crossed.
@@ -90,7 +92,7 @@ from visualization_msgs.msg import MarkerArray
 
 from .conversions import (configuration_from_msg, duration_msg, is_empty_scene, pose_msg,
                           scene_from_msg, scene_to_msg)
-from .mechanism_parameters import box_middle, declare_mechanism
+from .mechanism_parameters import box_middle, declare_mechanism, kept_scene
 from .profiles import BASE_FRAME, LATCHED_QOS, STATE_QOS
 from .spin import run
 from .visualization import mechanism_markers, scene_markers
@@ -176,6 +178,8 @@ class Rpr3Driver(Node):
                  "timed [joint unit/s]")
         described = declare_mechanism(self)
         self.mechanism = described.mechanism
+        # The widths and layers of the bodies a scene is checked with.
+        self.bodies = described.bodies
         names = self.mechanism.joint_names
         # Joint ranges are the file's box; a joint that turns fully has none.
         self.limits = [None if a.periodic else (a.low, a.high) for a in described.axes]
@@ -358,12 +362,13 @@ class Rpr3Driver(Node):
             scene = scene_from_msg(msg)
             if is_empty_scene(scene):
                 scene = None
-                inside = None
-            else:
+            kept = kept_scene(scene, self.bodies)
+            inside = None
+            if kept is not None:
                 # Checks the limits' names against the mechanism (and loads
                 # the collision kernels before a goal needs them).
                 rho, pose, _ = self.state()
-                inside = configuration_collision(self.mechanism, scene, rho, pose)
+                inside = configuration_collision(self.mechanism, kept, rho, pose, self.bodies)
         except Exception as exc:  # GWRError: a bad scene; anything else a bug
             self.refused_scenes += 1
             self.get_logger().error(f"refusing a scene, checking against the previous one: "
@@ -550,10 +555,11 @@ class Rpr3Driver(Node):
                                    f"singularity margin would fall to {abs(extreme):.2e} "
                                    f"< abort_margin {abort_margin:g} {at}",
                                    min(smallest, abs(extreme)))
-            scene = self._scene
+            scene = kept_scene(self._scene, self.bodies)
             if scene is not None:
                 hit = path_collisions(self.mechanism, scene,
-                                      np.array([rho, *positions[between], target]), pose)
+                                      np.array([rho, *positions[between], target]), pose,
+                                      self.bodies)
                 if hit is not None:
                     with self._lock:
                         self._collision = hit
