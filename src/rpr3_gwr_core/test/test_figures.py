@@ -1,7 +1,8 @@
 """The figures: each is written as a readable PNG and shows what explains it
 (count colour bars, region ids, legends, both global paths, start and goal,
-the joints and pose track of plans off a 2-D grid), for the paper's slice,
-3-D roadmaps (uniform, adaptive, the full one) and other mechanisms."""
+the joints and pose track of plans off a 2-D grid, the base plane of plans in
+a scene), for the paper's slice, 3-D roadmaps (uniform, adaptive, the full
+one) and other mechanisms."""
 
 import math
 import pathlib
@@ -9,6 +10,7 @@ import pathlib
 import matplotlib.image
 import numpy as np
 import pytest
+from matplotlib.patches import Circle, Polygon
 
 from rpr3_gwr_core import PAPER_GEOMETRY, Grid, Planner, build_roadmap
 from rpr3_gwr_core.exceptions import GWRError, InvalidInputError
@@ -17,7 +19,7 @@ from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
 from rpr3_gwr_core.mechanisms import DEFAULT_FIVE_BAR
 from rpr3_gwr_core.workspace.adaptive import coarse_base, refine
 from rpr3_gwr_core.workspace.grid import Axis
-from rpr3_gwr_core.world import load_scene
+from rpr3_gwr_core.world import EMPTY_SCENE, load_scene
 
 D = math.radians
 Q1, Q2 = (17, 12, 18, D(122.82)), (17, 10, 25, D(-24.24))
@@ -267,6 +269,34 @@ def test_a_five_bar_torus_plan_keeps_the_2d_look(five_bar_torus, tmp_path):
     figure = field_figure(five_bar_torus)
     written(figure, tmp_path)
     assert_integer_count_bar(figure, DEFAULT_FIVE_BAR.max_solutions)
+
+
+def test_a_plan_off_a_2d_grid_in_a_scene_gains_the_base_plane(adaptive_roadmap, tmp_path):
+    plan = plan_in_one_patch(adaptive_roadmap)
+    assert len(plan_figure(adaptive_roadmap, plan).axes) == 3
+    world = Planner(adaptive_roadmap).apply_scene(
+        load_scene(CONFIG / "scenes" / "paper_narrowed.yaml"))
+    figure = plan_figure(adaptive_roadmap, plan, world)
+    check_space_plan_figure(figure, adaptive_roadmap, plan, tmp_path)
+    assert len(figure.axes) == 4
+    base = figure.axes[3]
+    assert base.get_title() == ("base plane: the scene, the bodies at start and goal\n"
+                                "(obstacle clearance 0.5)")
+    assert [(tuple(c.center), c.radius) for c in base.patches
+            if isinstance(c, Circle)] == [((6.0, 28.0), 2.0)]
+    assert {"post", "plate"} <= {t.get_text() for t in base.texts}
+    # At each end three legs and the platform, beside the obstacle "plate".
+    assert [line.get_color() for line in base.get_lines()].count("tab:green") == 3
+    assert sum(isinstance(p, Polygon) for p in base.patches) == 3
+
+
+def test_a_scene_panel_needs_the_platform_in_the_base_plane(five_bar_torus, monkeypatch):
+    plan = plan_in_one_patch(five_bar_torus)
+    world = Planner(five_bar_torus).apply_scene(EMPTY_SCENE)
+    # A pose whose second coordinate is an angle places no point in the plane.
+    monkeypatch.setattr(type(five_bar_torus.mechanism), "angular", (False, True))
+    with pytest.raises(InvalidInputError, match="5R's pose has no two lengths"):
+        plan_figure(five_bar_torus, plan, world)
 
 
 def test_the_slice_of_a_3d_roadmap_refuses_a_plane_off_two_axes(planes_roadmap):

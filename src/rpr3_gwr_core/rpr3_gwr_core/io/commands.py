@@ -262,7 +262,7 @@ def _roadmap(args, progress):
         from ..planning import Planner
 
         progress("the scene's blocked solutions", 0.0)
-        world = _applied(Planner(roadmap), _load_scene(args.scene), args)
+        world = _applied(Planner(roadmap), _load_scene(args.scene), _bodies(args), args.scene)
         progress("the scene's blocked solutions", 1.0)
         solutions = roadmap.segmentation.patch > 0
         summary["scene"] = {"file": args.scene, "parts": world.n_parts,
@@ -355,12 +355,13 @@ def _load_scene(path):
         raise InvalidInputError(f"{path}: {exc}") from None
 
 
-def _applied(planner, scene, args):
-    """The planner's roadmap restricted to ``--scene``, its errors naming the file."""
+def _applied(planner, scene, model, source):
+    """The planner's roadmap restricted to a scene with a body model (None:
+    the defaults), its errors naming ``source``, where the scene comes from."""
     try:
-        return planner.apply_scene(scene, _bodies(args))
+        return planner.apply_scene(scene, model)
     except InvalidInputError as exc:
-        raise InvalidInputError(f"{args.scene}: {exc}") from None
+        raise InvalidInputError(f"{source}: {exc}") from None
 
 
 def _plan(args, progress):
@@ -453,13 +454,17 @@ def _answer(args, progress, roadmap, index, start, goal, options, roadmap_doc):
     header = {"roadmap": roadmap_doc, "columns": _columns(mechanism),
               "request": {"start": dict(zip(labels, map(float, start))),
                           "goal": dict(zip(labels, map(float, goal)))}}
-    scene = None if args.scene is None else _load_scene(args.scene)
-    if scene is not None:
+    scene = model = None
+    if args.scene is not None:
+        scene, model = _load_scene(args.scene), _bodies(args)
         header["scene"] = scene.to_dict()
+        # What the scene blocks depends on the bodies: 'plot' draws it with these.
+        if model is not None:
+            header["bodies"] = model.to_dict()
     begin = time.perf_counter()
     planner = Planner(roadmap, index)
     # A scene that does not fit the mechanism is bad input, not "no plan".
-    world = None if scene is None else _applied(planner, scene, args)
+    world = None if scene is None else _applied(planner, scene, model, args.scene)
     try:
         termination = NEVER if args.time_limit is None else Termination.after(args.time_limit)
         progress("planning", 0.0)
@@ -542,20 +547,43 @@ def _read_plan(path):
     return mechanism, grid, plan
 
 
+def _plan_scene(path, plan):
+    """The scene of a plan file and the body model it was planned with
+    (None: the defaults), None for a plan without a scene."""
+    from ..world import body_model_from_dict, scene_from_dict
+
+    if plan.get("scene") is None:
+        return None
+    try:
+        scene = scene_from_dict(plan["scene"])
+        model = None if plan.get("bodies") is None else body_model_from_dict(plan["bodies"])
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"the scene of {path}: {exc}") from None
+    return scene, model
+
+
 def _plot(args, progress):
-    from .cache import cached_roadmap
+    from .cache import cached_planning
     from .figures import plan_figure
 
     mechanism, grid, plan = _read_plan(args.plan_file)
+    in_scene = _plan_scene(args.plan_file, plan)
     if grid is None:
-        roadmap, _, _ = _full_roadmap(args.cache_dir, progress)
+        roadmap, index, _ = _full_roadmap(args.cache_dir, progress)
     else:
         from .mechanism_file import roadmap_grid
 
         check_roadmap_grid(mechanism, grid)
         base, refinement = roadmap_grid(grid)
-        roadmap, _ = cached_roadmap(mechanism, base, args.cache_dir, progress,
-                                    refinement=refinement)
+        roadmap, index, _ = cached_planning(mechanism, base, args.cache_dir, progress,
+                                            refinement=refinement)
+    world = None
+    if in_scene is not None:
+        from ..planning import Planner
+
+        progress("the scene's blocked solutions", 0.0)
+        world = _applied(Planner(roadmap, index), *in_scene, f"the scene of {args.plan_file}")
+        progress("the scene's blocked solutions", 1.0)
     output = args.output or os.path.splitext(args.plan_file)[0] + ".png"
-    _save(output, plan_figure(roadmap, plan), dpi=110)
+    _save(output, plan_figure(roadmap, plan, world), dpi=110)
     return {"figure": output}

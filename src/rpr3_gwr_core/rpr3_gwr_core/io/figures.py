@@ -21,7 +21,7 @@ from matplotlib import colormaps
 from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
-from matplotlib.patches import Patch as LegendPatch
+from matplotlib.patches import Circle, Patch as LegendPatch, Polygon
 from scipy import sparse
 from scipy.ndimage import distance_transform_cdt, find_objects, label as label_pieces
 from scipy.sparse.csgraph import connected_components
@@ -42,10 +42,13 @@ _REGION_CAPTION = "Circled: region ids, regions numbered by decreasing area.  "
 _CHOSEN_STYLE = {"color": "tab:orange", "ls": "-", "lw": 2.2, "marker": "o", "ms": 4}
 _OTHER_STYLE = {"color": "tab:purple", "ls": "--", "lw": 1.6, "marker": "s", "ms": 4}
 # The start a ring, the goal a star inside it: both show where they coincide.
-_START_STYLE = {"marker": "o", "ms": 15, "mfc": "none", "mec": "tab:green", "mew": 2.5,
+# The bodies at each end are drawn in its colour.
+_START_COLOUR, _GOAL_COLOUR = "tab:green", "tab:red"
+_START_STYLE = {"marker": "o", "ms": 15, "mfc": "none", "mec": _START_COLOUR, "mew": 2.5,
                 "ls": "none"}
-_GOAL_STYLE = {"marker": "*", "ms": 11, "color": "tab:red", "mec": "k", "mew": 0.5,
+_GOAL_STYLE = {"marker": "*", "ms": 11, "color": _GOAL_COLOUR, "mec": "k", "mew": 0.5,
                "ls": "none"}
+_OBSTACLE_STYLE = {"fc": "0.6", "ec": "k", "lw": 0.8}
 
 
 def field_figure(roadmap, world=None):
@@ -93,16 +96,7 @@ def field_figure(roadmap, world=None):
         ax.plot(*plane.space.points([c.joints for c in cusps]).T, "r^", ms=8, label="cusp")
     title = f"n-solution field and regions{_fixed_text(roadmap, prefix=', ')}"
     if world is not None:
-        solutions = seg.patch > 0
-        blocked = (solutions & ~world.free).sum(axis=1)
-        some = (blocked > 0)[plane.cells]
-        every = (blocked == solutions.sum(axis=1))[plane.cells] & some
-        for mask, hatch, name in ((some & ~every, "//", "scene blocks some solutions"),
-                                  (every, "xxxx", "scene blocks every solution")):
-            if mask.any():
-                ax.contourf(plane.u, plane.v, mask.T.astype(float), levels=[0.5, 1.5],
-                            colors="none", hatches=[hatch])
-                handles.append(LegendPatch(fc="none", ec="k", hatch=hatch, label=name))
+        handles += _hatch_blocked(ax, plane, seg, world)
         title += f"\n{world.n_parts} free parts in the scene"
     ax.legend(handles=ax.get_legend_handles_labels()[0] + handles, loc="upper left",
               fontsize=8)
@@ -218,7 +212,7 @@ def roadmap_figure(roadmap, seed=0):
     return fig
 
 
-def plan_figure(roadmap, plan, sheet_stride=6):
+def plan_figure(roadmap, plan, world=None, sheet_stride=6):
     """A planned path, as the paper's figures 11 to 13.
 
     On a 2-D grid: left, the path over the plane of the grid's joints with
@@ -236,11 +230,19 @@ def plan_figure(roadmap, plan, sheet_stride=6):
     legend.  The start is a green ring, the goal a red star inside it where
     they coincide, each labelled with its value of the mode coordinate.
 
+    With a scene, the plane of a 2-D grid is hatched where the scene blocks
+    solutions (as in :func:`field_figure`), and a panel on the right draws
+    the base plane in the length unit: the obstacles with their ids, the
+    mechanism's bodies at the start (green) and at the goal (red) and the
+    trace of the platform's reference point (the pose's first two lengths).
+
     Parameters
     ----------
     roadmap : Roadmap
     plan : dict
         :meth:`~rpr3_gwr_core.planning.Plan.to_dict` output.
+    world : SceneRoadmap, optional
+        The roadmap restricted to the scene the plan was made in.
     sheet_stride : int
         Draw every n-th cell of the patches' sheets in the 3-D view of a
         2-D grid's plan.
@@ -253,7 +255,8 @@ def plan_figure(roadmap, plan, sheet_stride=6):
     ------
     InvalidInputError
         If a global path of the plan goes through patches the roadmap has
-        not (it was planned on another grid).
+        not (it was planned on another grid), or with a scene, if the pose
+        has no two lengths to place the platform in the base plane.
     """
     seg = roadmap.segmentation
     paths = [list(p) for p in plan.get("global_paths") or [[]]]
@@ -268,8 +271,9 @@ def plan_figure(roadmap, plan, sheet_stride=6):
     if roadmap.grid.ndim == 2:
         plane = _Plane(roadmap, {})
         return _plane_plan_figure(roadmap, plane, track, paths, chosen,
-                                  _patch_points(roadmap, patches, plane), sheet_stride)
-    return _space_plan_figure(roadmap, track, paths, chosen, _patch_points(roadmap, patches))
+                                  _patch_points(roadmap, patches, plane), sheet_stride, world)
+    return _space_plan_figure(roadmap, track, paths, chosen, _patch_points(roadmap, patches),
+                              world)
 
 
 class _Space:
@@ -430,24 +434,28 @@ def _draw_plan(ax, space, track, paths, chosen, points, named):
     _mark_ends(ax, space.points(track.states[[0, -1]]), track.ends, named)
 
 
-def _plane_plan_figure(roadmap, plane, track, paths, chosen, points, sheet_stride):
+def _plane_plan_figure(roadmap, plane, track, paths, chosen, points, sheet_stride, world):
     """:func:`plan_figure` of a 2-D grid."""
     seg, mechanism = roadmap.segmentation, roadmap.mechanism
     mode = mechanism.mode_coordinate
-    fig = Figure(figsize=(14, 6.5))
-    fig.subplots_adjust(left=0.06, right=0.97, bottom=0.16, top=0.9, wspace=0.15)
-    ax = plane.space.axes(fig, 1, 2, 1)
+    columns = 2 if world is None else 3
+    fig = Figure(figsize=(7 * columns, 6.5))
+    # The left margin keeps its width in inches with the scene's panel.
+    fig.subplots_adjust(left=0.12 / columns, right=0.97, bottom=0.16, top=0.9, wspace=0.15)
+    ax = plane.space.axes(fig, 1, columns, 1)
     region = seg.region[plane.cells]
     ax.imshow(np.transpose(_region_palette(seg.n_regions)[region], (1, 0, 2)), origin="lower",
               extent=plane.extent, interpolation="nearest", aspect="auto")
+    hatches = [] if world is None else _hatch_blocked(ax, plane, seg, world)
     for r, piece in _region_pieces(region):
         if piece["largest"]:
             _region_label(ax, plane, piece["at"], r)
     _draw_plan(ax, plane.space, track, paths, chosen, points, named=True)
     ax.set_title(f"trajectory via global path {chosen + 1}{_fixed_text(roadmap, prefix=', ')}")
-    ax.legend(loc="upper left", fontsize=8, framealpha=0.9)
+    ax.legend(handles=ax.get_legend_handles_labels()[0] + hatches, loc="upper left",
+              fontsize=8, framealpha=0.9)
     space = plane.space + _Space.of_pose(mechanism, [mode])
-    ax3 = space.axes(fig, 1, 2, 2)
+    ax3 = space.axes(fig, 1, columns, 2)
     for pid in sorted(set().union(*paths)):
         patch = seg.patches[pid]
         cells, slots = patch.cells[::sheet_stride], patch.slots[::sheet_stride]
@@ -456,23 +464,26 @@ def _plane_plan_figure(roadmap, plane, track, paths, chosen, points, sheet_strid
         ax3.scatter(*sheet.T, s=1, alpha=0.25, label=str(pid))
     _draw_plan(ax3, space, track, paths, chosen, points, named=False)
     ax3.legend(loc="upper left", markerscale=8, title="patch", fontsize=8)
+    if world is not None:
+        _draw_base_plane(fig, (1, 3, 3), mechanism, track, world)
     _caption(fig, _REGION_CAPTION + _patch_id_caption(roadmap))
     return fig
 
 
-def _space_plan_figure(roadmap, track, paths, chosen, points):
+def _space_plan_figure(roadmap, track, paths, chosen, points, world):
     """:func:`plan_figure` of a grid that is not 2-D."""
     mechanism = roadmap.mechanism
-    fig = Figure(figsize=(14, 11.5))
-    fig.subplots_adjust(left=0.06, right=0.97, bottom=0.1, top=0.88, hspace=0.25)
+    columns = 2 if world is None else 3
+    fig = Figure(figsize=(7 * columns, 11.5))
+    fig.subplots_adjust(left=0.12 / columns, right=0.97, bottom=0.1, top=0.88, hspace=0.25)
     legs = _Space.of_joints(roadmap, range(min(3, mechanism.n_joints)))
-    ax = legs.axes(fig, 2, 2, 1)
+    ax = legs.axes(fig, 2, columns, 1)
     _draw_plan(ax, legs, track, paths, chosen, points, named=True)
     ax.set_title(f"legs along the path, via global path {chosen + 1}")
     # Above both views, which draw the same lines: inside one it hides the path.
     fig.legend(*ax.get_legend_handles_labels(), loc="upper center", ncols=2, fontsize=8)
     pose = _Space.of_pose(mechanism, range(min(3, mechanism.pose_size)))
-    ax_pose = pose.axes(fig, 2, 2, 2)
+    ax_pose = pose.axes(fig, 2, columns, 2)
     _draw_plan(ax_pose, pose, track, paths, chosen, points, named=False)
     ax_pose.set_title("pose track of the platform")
 
@@ -498,8 +509,65 @@ def _space_plan_figure(roadmap, track, paths, chosen, points):
     ax_q.set_title("joints against the path" + (" (patch ids between the dotted lines)" if np.any(
         track.patches >= 0) else ""), pad=16)
     ax_q.legend(loc="best", fontsize=8)
+    if world is not None:
+        _draw_base_plane(fig, (2, 3, 3), mechanism, track, world)
     _caption(fig, _patch_id_caption(roadmap))
     return fig
+
+
+def _draw_base_plane(fig, position, mechanism, track, world):
+    """The base-plane panel of a plan in a scene: the obstacles with their
+    ids, the bodies at the start and at the goal in the colours of their
+    marks, and the trace of the platform's reference point."""
+    scene = world.scene
+    coordinates = _position(mechanism)
+    trace = _Space.of_pose(mechanism, coordinates)
+    ax = trace.axes(fig, *position)
+    shapes = [(o.id, Polygon(o.vertices, **_OBSTACLE_STYLE), o.vertices.mean(axis=0))
+              for o in scene.polygons]
+    shapes += [(o.id, Circle(o.center, o.radius, **_OBSTACLE_STYLE), o.center)
+               for o in scene.discs]
+    for name, shape, at in shapes:
+        ax.add_patch(shape)
+        ax.text(*at, name, ha="center", va="center", fontsize=8,
+                bbox={"boxstyle": "round", "fc": "white", "alpha": 0.8, "lw": 0})
+    n = mechanism.n_joints
+    ends = track.states[[0, -1]]
+    bodies = mechanism.bodies(ends[:, n:], ends[:, :n], world.index.model)
+    handles = [LegendPatch(**_OBSTACLE_STYLE, label="obstacle (its id)")]
+    for k, (end, colour) in enumerate((("start", _START_COLOUR), ("goal", _GOAL_COLOUR))):
+        for link in bodies.capsules[k]:
+            ax.plot(*link.T, "-o", color=colour, lw=2, ms=3)
+        for plate in bodies.polygons[k]:
+            ax.add_patch(Polygon(plate, fc=colour, ec=colour, alpha=0.3))
+        handles.append(Line2D([], [], color=colour, lw=2, marker="o", ms=3,
+                              label=f"bodies at the {end}"))
+    names = ", ".join(mechanism.pose_names[k] for k in coordinates)
+    ax.plot(*trace.line(track.states).T, "k-", lw=1.2, label=f"trace of ({names})")
+    # Unlabelled: the labels would hide the bodies, the legends of the other panels name them.
+    for point, style in zip(trace.points(ends), (_START_STYLE, _GOAL_STYLE)):
+        ax.plot(*([value] for value in point), **style)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.legend(handles=ax.get_legend_handles_labels()[0] + handles, loc="best", fontsize=8)
+    clearance = scene.limits.obstacle_clearance
+    ax.set_title("base plane: the scene, the bodies at start and goal"
+                 + (f"\n(obstacle clearance {clearance:g})" if clearance else ""))
+
+
+def _position(mechanism):
+    """The pose coordinates of the platform's reference point in the base
+    plane: the pose's first two lengths.
+
+    Raises
+    ------
+    InvalidInputError
+        If the pose has fewer.
+    """
+    lengths = [k for k, angle in enumerate(mechanism.angular) if not angle]
+    if len(lengths) < 2:
+        raise InvalidInputError(f"the {mechanism.kind}'s pose has no two lengths to place "
+                                "its platform in the base plane of a scene")
+    return lengths[:2]
 
 
 def _check_plane(roadmap):
@@ -550,6 +618,29 @@ def _count_legend_handles(seg, region, cells):
     handles = [Line2D([], [], color="k", lw=0.8, label="region boundary")]
     if np.any((region == 0) & (seg.field.count[cells] > 0)):
         handles.append(LegendPatch(fc="white", ec="0.5", label="unresolved cells (no region)"))
+    return handles
+
+
+def _hatch_blocked(ax, plane, seg, world):
+    """Hatches the pixels of a plane whose cells have solutions a scene
+    blocks: densely where it blocks every one.
+
+    Returns
+    -------
+    list of matplotlib.patches.Patch
+        Legend entries of the hatches drawn.
+    """
+    solutions = seg.patch > 0
+    blocked = (solutions & ~world.free).sum(axis=1)
+    some = (blocked > 0)[plane.cells]
+    every = (blocked == solutions.sum(axis=1))[plane.cells] & some
+    handles = []
+    for mask, hatch, name in ((some & ~every, "//", "scene blocks some solutions"),
+                              (every, "xxxx", "scene blocks every solution")):
+        if mask.any():
+            ax.contourf(plane.u, plane.v, mask.T.astype(float), levels=[0.5, 1.5],
+                        colors="none", hatches=[hatch])
+            handles.append(LegendPatch(fc="none", ec="k", hatch=hatch, label=name))
     return handles
 
 
