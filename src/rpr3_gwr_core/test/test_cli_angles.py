@@ -16,6 +16,7 @@ from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
 
 CONFIG = pathlib.Path(__file__).resolve().parents[3] / "config"
 FIVE_BAR, THREE_RRR = str(CONFIG / "five_bar.yaml"), str(CONFIG / "three_rrr.yaml")
+FIVE_BAR_TEXT = (CONFIG / "five_bar.yaml").read_text()
 PAPER_COLUMNS = {"joints": ["rho1", "rho2", "rho3"], "pose": ["x", "y", "alpha_deg"]}
 
 
@@ -124,3 +125,17 @@ def test_the_help_of_every_command_and_angle_names_degrees():
         action = next(a for a in actions if (a.option_strings or [None])[0] == option
                       or (option is None and a.dest == "joints"))
         assert "deg" in action.help, (name, option)
+
+
+def test_a_fixed_angle_outside_its_range_is_refused_in_degrees(cache, capsys, tmp_path):
+    # A five-bar whose first joint turns within [-1, 1] rad only.
+    document = FIVE_BAR_TEXT.replace("- {name: th1, periodic: true, cells: 120}",
+                                     "- {name: th1, min: -1.0, max: 1.0, step: 0.02}")
+    path = tmp_path / "limited_five_bar.yaml"
+    path.write_text(document)
+    with pytest.raises(SystemExit) as stop:
+        main(["roadmap", "--mechanism", str(path), "--fix", "th1=90", *cache])
+    assert stop.value.code == 2
+    error = capsys.readouterr().err
+    assert "th1=90 deg lies outside its range [-57.2958, 57.2958] deg" in error
+    assert main(["roadmap", "--mechanism", str(path), "--fix", "th1=45", *cache]) == 0

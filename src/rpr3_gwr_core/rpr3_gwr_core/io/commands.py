@@ -330,6 +330,15 @@ def _file_roadmap(args):
     described = load_mechanism_file(args.mechanism)
     mechanism = described.mechanism
     angle = dict(zip(mechanism.joint_names, _angles(mechanism)[0]))
+    axes = dict(zip(mechanism.joint_names, described.axes))
+    for name, value in args.fix:
+        # The file's range of an angle, as the user gave the value: in degrees.
+        axis = axes.get(name)
+        if angle.get(name) and not axis.periodic and not (
+                axis.low <= math.radians(value) <= axis.high):
+            raise InvalidInputError(f"--fix {name}={value:g} deg lies outside its range "
+                                    f"[{math.degrees(axis.low):g}, "
+                                    f"{math.degrees(axis.high):g}] deg")
     grid = described.grid({name: math.radians(value) if angle.get(name) else value
                            for name, value in args.fix})
     check_roadmap_grid(mechanism, grid)
