@@ -14,6 +14,7 @@ legs lie in the box and the margin is at least 3e-3.
 """
 
 import argparse
+from concurrent.futures import ThreadPoolExecutor
 import json
 import math
 import statistics
@@ -29,6 +30,8 @@ from rpr3_gwr_core.io.cache import cached_planning
 from rpr3_gwr_core.paper import FULL_BASE_GRID, FULL_REFINEMENT
 from rpr3_gwr_core.planning import planning_index
 
+from bench_roadmap import THREADS  # bench/ is the script's folder
+
 # VmHWM, unlike ru_maxrss, is not inherited across exec from the parent.
 _BUILD = """
 import sys, time
@@ -39,9 +42,11 @@ def hwm():
     for line in open("/proc/self/status"):
         if line.startswith("VmHWM:"):
             return int(line.split()[1])
+from concurrent.futures import ThreadPoolExecutor
 start = time.perf_counter()
-roadmap, hit = cached_roadmap(PAPER_GEOMETRY, FULL_BASE_GRID, sys.argv[1],
-                              refinement=FULL_REFINEMENT)
+with ThreadPoolExecutor(int(sys.argv[2])) as pool:
+    roadmap, hit = cached_roadmap(PAPER_GEOMETRY, FULL_BASE_GRID, sys.argv[1],
+                                  refinement=FULL_REFINEMENT, workers=pool.map)
 print(time.perf_counter() - start, hwm(), hit)
 """
 
@@ -73,16 +78,18 @@ def main():
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as cache:
         seconds, peak_kb, _ = subprocess.run(
-            [sys.executable, "-c", _BUILD, cache], capture_output=True, text=True,
-            check=True).stdout.split()
+            [sys.executable, "-c", _BUILD, cache, str(THREADS)], capture_output=True,
+            text=True, check=True).stdout.split()
         print(json.dumps({"stage": "build (cold, refinement included)",
                           "seconds": round(float(seconds), 2),
                           "peak_rss_mb": round(int(peak_kb) / 1024, 1)}))
         loads = []
         for _ in range(3):
             start = time.perf_counter()
-            roadmap, index, hit = cached_planning(PAPER_GEOMETRY, FULL_BASE_GRID, cache,
-                                                  refinement=FULL_REFINEMENT)
+            with ThreadPoolExecutor(THREADS) as pool:
+                roadmap, index, hit = cached_planning(PAPER_GEOMETRY, FULL_BASE_GRID, cache,
+                                                      refinement=FULL_REFINEMENT,
+                                                      workers=pool.map)
             loads.append(time.perf_counter() - start)
             assert hit
     seg = roadmap.segmentation

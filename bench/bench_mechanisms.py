@@ -24,6 +24,7 @@ JSON line per measurement.
 """
 
 import argparse
+from concurrent.futures import ThreadPoolExecutor
 import json
 import math
 import pathlib
@@ -40,7 +41,7 @@ from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
 from rpr3_gwr_core.workspace.grid import Axis, Grid
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from bench_roadmap import eigenvalue_baseline  # noqa: E402
+from bench_roadmap import THREADS, eigenvalue_baseline  # noqa: E402
 
 CONFIG = pathlib.Path(__file__).resolve().parents[1] / "config"
 # The file and the joint it fixes for the slice.
@@ -55,11 +56,14 @@ from rpr3_gwr_core import build_roadmap
 from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
 from rpr3_gwr_core.planning import planning_index
 from rpr3_gwr_core.workspace.adaptive import coarse_base, refine
+from concurrent.futures import ThreadPoolExecutor
 described = load_mechanism_file(sys.argv[1])
 refinement = int(sys.argv[2])
 wall, cpu = time.perf_counter(), time.process_time()
-grid = refine(described.mechanism, coarse_base(described.grid(), refinement), refinement)
-roadmap = build_roadmap(described.mechanism, grid)
+with ThreadPoolExecutor(int(sys.argv[3])) as pool:
+    grid = refine(described.mechanism, coarse_base(described.grid(), refinement), refinement,
+                  workers=pool.map)
+    roadmap = build_roadmap(described.mechanism, grid, workers=pool.map)
 wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
 index = time.perf_counter()
 planning_index(roadmap)
@@ -116,14 +120,17 @@ def main():
     args = parser.parse_args()
     baseline = eigenvalue_baseline(args.repeat)
     print(json.dumps({"baseline_s": round(baseline, 3)}), flush=True)
+    # The builds run their chunks in a thread per core, as the command line's do.
+    pool = ThreadPoolExecutor(THREADS)
     for name, fixed in SLICES.items():
         described = load_mechanism_file(CONFIG / name)
         grid = _resampled(described.grid(fixed), args.cells)
-        build_roadmap(described.mechanism, _resampled(grid, 41))  # compile or load kernels
+        # Compiles or loads the kernels.
+        build_roadmap(described.mechanism, _resampled(grid, 41), workers=pool.map)
         times = []
         for _ in range(args.repeat):
             begin = time.perf_counter()
-            roadmap = build_roadmap(described.mechanism, grid)
+            roadmap = build_roadmap(described.mechanism, grid, workers=pool.map)
             times.append(time.perf_counter() - begin)
         build = statistics.median(times)
         seg = roadmap.segmentation
@@ -151,8 +158,8 @@ def main():
     if not args.no_full:
         # Compiled kernels are loaded from numba's cache by the first slice builds.
         out = subprocess.run([sys.executable, "-c", _FULL_BUILD, str(CONFIG / "three_rrr.yaml"),
-                              str(args.full_refinement)], capture_output=True, text=True,
-                             check=True).stdout
+                              str(args.full_refinement), str(THREADS)], capture_output=True,
+                             text=True, check=True).stdout
         row = json.loads(out)
         peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
         print(json.dumps({"mechanism": "3-RRR", "file": "three_rrr.yaml", "full": True,

@@ -1,11 +1,14 @@
 """The grid and the n-solution field."""
 
+from concurrent.futures import ThreadPoolExecutor
+import threading
+
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
 from rpr3_gwr_core.paper import PAPER_GRID, rho1_slice
-from rpr3_gwr_core.workspace import Grid, compute_field
+from rpr3_gwr_core.workspace import Grid, build_roadmap, compute_field
 from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY
 from rpr3_gwr_core.mechanisms.rpr3 import MAX_SOLUTIONS
 from rpr3_gwr_core.mechanisms import rpr3
@@ -188,3 +191,18 @@ def test_roots_close_to_merging_are_left_to_the_full_sextic():
     np.testing.assert_allclose(roots[3, :4], [-5 * np.pi / 6, -np.pi / 6, np.pi / 6,
                                               5 * np.pi / 6])
     assert np.all(np.isnan(roots[3, 4:]))
+
+
+def test_the_core_starts_no_thread_and_a_callers_pool_builds_the_same_roadmap():
+    grid = rho1_slice(step=0.5)
+    before = threading.active_count()
+    threads = []
+    serial = build_roadmap(PAPER_GEOMETRY, grid,
+                           progress=lambda *_: threads.append(threading.active_count()))
+    assert threads and set(threads) == {before}
+    with ThreadPoolExecutor(2) as pool:
+        pooled = build_roadmap(PAPER_GEOMETRY, grid, workers=pool.map)
+    for name in ("count", "poses", "margin"):
+        np.testing.assert_array_equal(getattr(pooled.field, name), getattr(serial.field, name))
+    np.testing.assert_array_equal(pooled.segmentation.patch, serial.segmentation.patch)
+    assert sorted(pooled.segmentation.gates) == sorted(serial.segmentation.gates)

@@ -57,6 +57,8 @@ import time
 
 from rpr3_gwr_core.exceptions import PlanningTimeoutError
 
+from .core_threads import core_threads
+
 __all__ = ["PlanWorkers", "WorkerFailed", "WorkersClosed"]
 
 # How often a worker stamps its heartbeat, and looks for its node's process
@@ -126,7 +128,9 @@ class PlanWorkers:
         self.folder = tempfile.mkdtemp(prefix=f"planner-{os.getpid()}-", dir=directory)
         try:
             save_planning_files(self.folder, roadmap, index)
-            self.planner = Planner(*map_planning_files(self.folder), **planner_options)
+            with core_threads() as pool:
+                mapped = map_planning_files(self.folder, workers=pool.map)
+            self.planner = Planner(*mapped, **planner_options)
             self.planner.warm_up()
             started = [_Worker(self.folder, k, planner_options) for k in range(count)]
             self._idle.extend(started)

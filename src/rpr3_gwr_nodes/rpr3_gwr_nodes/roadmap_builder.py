@@ -53,6 +53,7 @@ from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
 
 from .conversions import roadmap_to_msgs
+from .core_threads import core_threads
 from .mechanism_parameters import box_middle, declare_mechanism
 from .memory import release_free_memory, use_one_arena
 from .profiles import BASE_FRAME, LATCHED_QOS
@@ -224,11 +225,13 @@ class RoadmapBuilder(Node):
             self.get_logger().info(f"  {fraction:4.0%} {stage} ({now - start:.1f} s)")
 
         try:
-            if values["full"]:
-                roadmap, _ = cached_roadmap(self.mechanism, grid, progress=progress,
-                                            refinement=refinement)
-            else:
-                roadmap = build_roadmap(self.mechanism, grid, progress=progress)
+            with core_threads() as pool:
+                if values["full"]:
+                    roadmap, _ = cached_roadmap(self.mechanism, grid, progress=progress,
+                                                refinement=refinement, workers=pool.map)
+                else:
+                    roadmap = build_roadmap(self.mechanism, grid, progress=progress,
+                                            workers=pool.map)
         except Exception as exc:  # a failed build must not take the builder down
             self.get_logger().error(f"building the roadmap failed: {exc!r}")
             self._keep_last_good()

@@ -64,7 +64,6 @@ in the way), the roadmap is built and returned without being stored, with a
 :class:`CacheWarning`.
 """
 
-from concurrent.futures import ThreadPoolExecutor
 import hashlib
 import json
 import math
@@ -112,9 +111,6 @@ _AREA = "patch_area"
 _AREA_TYPE = "<f8"
 _MARGIN_SAMPLES = 4096
 _POSE_CHUNK = 32768
-# Arrays read and checksummed at once: CRC-32 releases the GIL, and the
-# checksums are most of a large entry's load.
-_READERS = max(1, min(4, os.cpu_count() or 1))
 _ENTRY_NAME = re.compile(r"[0-9a-f]{24}")
 _STAGING_NAME = re.compile(r"[0-9a-f]{24}\..+\.tmp")
 
@@ -155,7 +151,7 @@ def cache_key(mechanism, grid, method="components", min_region_cells=8, refineme
 
 
 def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=None,
-                   max_bytes=None):
+                   max_bytes=None, *, workers=map):
     """Load a roadmap from the cache, or build and store it.
 
     Parameters
@@ -175,6 +171,13 @@ def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=No
     max_bytes : int, optional
         Bound of the cache's entries after storing one [bytes] (module doc);
         defaults to :func:`default_max_bytes`.
+    workers : callable, optional
+        A map-like callable, ``workers(function, iterable)`` yielding the
+        results in order, such as ``ThreadPoolExecutor.map``: an entry's
+        arrays are read and checksummed with it, a build works with it
+        (:func:`~rpr3_gwr_core.workspace.build_roadmap`), in parallel with a
+        thread pool's (CRC-32 and numpy release the interpreter's lock).
+        The default, the builtin ``map``, works in the calling thread.
 
     Returns
     -------
@@ -195,12 +198,12 @@ def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=No
         stored (it is returned all the same).
     """
     roadmap, _, hit = cached_planning(mechanism, grid, cache_dir, progress, refinement,
-                                      max_bytes)
+                                      max_bytes, workers=workers)
     return roadmap, hit
 
 
 def cached_planning(mechanism, grid, cache_dir=None, progress=None, refinement=None,
-                    max_bytes=None):
+                    max_bytes=None, *, workers=map):
     """:func:`cached_roadmap` with the roadmap's planning index
     (:func:`~rpr3_gwr_core.planning.planning_index`), built with it and
     stored in its entry: a :class:`~rpr3_gwr_core.planning.Planner` given
@@ -223,7 +226,7 @@ def cached_planning(mechanism, grid, cache_dir=None, progress=None, refinement=N
     path = os.path.join(directory, key)
     if os.path.isdir(path):
         try:
-            roadmap, index = _load(path, (mechanism, grid, refinement))
+            roadmap, index = _load(path, (mechanism, grid, refinement), workers)
         except (InvalidInputError, OSError, ValueError) as exc:
             # Unless another process evicted it meanwhile: that is a plain miss.
             if os.path.isdir(path):
@@ -241,9 +244,11 @@ def cached_planning(mechanism, grid, cache_dir=None, progress=None, refinement=N
     # it: the planning index takes about a third.
     built = 0.05 if refinement is not None else 0.0
     if refinement is not None:
-        grid = refine(mechanism, grid, refinement, progress=part(progress, 0.0, built))
+        grid = refine(mechanism, grid, refinement, progress=part(progress, 0.0, built),
+                      workers=workers)
     refined = time.perf_counter() - begin
-    roadmap = build_roadmap(mechanism, grid, progress=part(progress, built, 0.7))
+    roadmap = build_roadmap(mechanism, grid, progress=part(progress, built, 0.7),
+                            workers=workers)
     if refinement is not None:
         roadmap.timings["refine"] = refined
     report = part(progress)
@@ -275,9 +280,16 @@ def save_planning_files(folder, roadmap, index):
     _save(folder, roadmap, index)
 
 
-def map_planning_files(folder):
+def map_planning_files(folder, *, workers=map):
     """The roadmap and planning index of :func:`save_planning_files` (or of
     a cache entry), mapped copy on write and checked as a cache entry is.
+
+    Parameters
+    ----------
+    folder : str
+    workers : callable, optional
+        A map-like callable the arrays are read and checksummed with, as
+        :func:`cached_roadmap`'s.
 
     Returns
     -------
@@ -291,7 +303,7 @@ def map_planning_files(folder):
     OSError
         If they cannot be read.
     """
-    return _load(folder)
+    return _load(folder, workers=workers)
 
 
 def _checksum(data):
@@ -340,7 +352,7 @@ def _save(folder, roadmap, index):
         json.dump(header, stream)
 
 
-def _load(folder, expected=None):
+def _load(folder, expected=None, workers=map):
     """The roadmap and planning index of an entry (module doc), which must
     be of ``expected = (mechanism, grid, refinement)`` when given; raises
     InvalidInputError naming what failed, or OSError."""
@@ -351,11 +363,10 @@ def _load(folder, expected=None):
             raise InvalidInputError(f"header.json is not JSON: {exc}") from exc
     _check_header(header, expected)
     listing = header["arrays"]
-    # Largest first, so that no large one is left to the end alone.
+    # Largest first, so that with parallel workers no large one is left to
+    # the end alone.
     names = sorted(listing, key=lambda name: -math.prod(listing[name]["shape"]))
-    with ThreadPoolExecutor(max_workers=_READERS) as pool:
-        arrays = dict(zip(names, pool.map(lambda name: _read(folder, name, listing[name]),
-                                          names)))
+    arrays = dict(zip(names, workers(lambda name: _read(folder, name, listing[name]), names)))
     index, tables = ({name[len(prefix):]: arrays.pop(name) for name in list(arrays)
                       if name.startswith(prefix)} for prefix in (_INDEX_PREFIX, _TABLE_PREFIX))
     areas = arrays.pop(_AREA)

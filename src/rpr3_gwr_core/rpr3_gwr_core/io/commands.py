@@ -12,6 +12,7 @@ the answer's ``columns``.  The documents the core reads back (``mechanism``,
 ``grid``, ``scene``, the roadmap JSON of ``-o``) keep the core's units.
 """
 
+from concurrent.futures import ThreadPoolExecutor
 import json
 import math
 import os
@@ -39,8 +40,12 @@ def run(args):
     """Run the parsed command: ``(JSON-able result, exit code)``."""
     commands = {"dk": _dk, "roadmap": _roadmap, "cusps": _cusps, "plan": _plan, "plot": _plot}
     progress = _Progress(sys.stderr)
+    # The core's builds and loads run their chunks with this pool's map: a
+    # thread a core (numpy, CRC-32 and the compiled kernels release the
+    # interpreter's lock); its threads start with the first chunk.
     try:
-        answer = commands[args.command](args, progress)
+        with ThreadPoolExecutor(max_workers=min(4, os.cpu_count() or 1)) as pool:
+            answer = commands[args.command](args, progress, pool.map)
     finally:
         progress.close()
     # Only a plan can fail without an error: it answers with its exit code.
@@ -149,7 +154,7 @@ def _joint_rate(mechanism, value, name):
     return math.radians(value)
 
 
-def _cusps(args, progress):
+def _cusps(args, progress, workers):
     from ..workspace.cusps import cusp_curves, find_cusps
     from .cache import cached_roadmap
 
@@ -168,7 +173,8 @@ def _cusps(args, progress):
         # The slices' builds take most of the time, the curves through them the rest.
         slices = [build_roadmap(PAPER_GEOMETRY, rho1_slice(float(v), step=slice_step),
                                 progress=part(progress, 0.8 * k / len(values),
-                                              0.8 * (k + 1) / len(values), f"rho1 = {v:g}"))
+                                              0.8 * (k + 1) / len(values), f"rho1 = {v:g}"),
+                                workers=workers)
                   for k, v in enumerate(values)]
         curves = cusp_curves(slices, progress=part(progress, 0.8, 1.0))
         return {"curves": [[_in_degrees(c.to_dict(PAPER_GEOMETRY), PAPER_GEOMETRY)
@@ -186,7 +192,7 @@ def _cusps(args, progress):
         if grid.ndim != 2:
             raise InvalidInputError(f"cusps are points of 2-D slices: --fix all joints but "
                                     f"two (the grid has {grid.ndim} axes)")
-    roadmap, _ = cached_roadmap(mechanism, grid, args.cache_dir, progress)
+    roadmap, _ = cached_roadmap(mechanism, grid, args.cache_dir, progress, workers=workers)
     try:
         cusps = find_cusps(roadmap)
     except NotImplementedError as exc:
@@ -194,7 +200,7 @@ def _cusps(args, progress):
     return [_in_degrees(c.to_dict(mechanism), mechanism) for c in cusps]
 
 
-def _dk(args, progress):
+def _dk(args, progress, workers):
     if args.mechanism is not None:
         from .mechanism_file import load_mechanism_file
 
@@ -220,15 +226,15 @@ def _dk(args, progress):
                                mechanism.margin(poses, joints))]
 
 
-def _full_roadmap(cache_dir, progress):
+def _full_roadmap(cache_dir, progress, workers):
     """The full 3-DOF roadmap, its planning index, and whether they came from the cache."""
     from .cache import cached_planning
 
     return cached_planning(PAPER_GEOMETRY, FULL_BASE_GRID, cache_dir, progress,
-                           refinement=FULL_REFINEMENT)
+                           refinement=FULL_REFINEMENT, workers=workers)
 
 
-def _roadmap(args, progress):
+def _roadmap(args, progress, workers):
     from .export import roadmap_summary, roadmap_to_gexf, roadmap_to_json
 
     _paper_slice_options(args, ("rho1", "rho2", "rho3", "step"))
@@ -240,21 +246,21 @@ def _roadmap(args, progress):
         described, grid = _file_roadmap(args)
         base, refinement = roadmap_grid(grid)
         roadmap, hit = cached_roadmap(described.mechanism, base, args.cache_dir, progress,
-                                      refinement=refinement)
+                                      refinement=refinement, workers=workers)
         if args.slice_figure:
             raise InvalidInputError("--slice-figure needs --full")
     elif args.full:
         if args.field_figure:
             raise InvalidInputError("--field-figure draws 2-D grids: with --full use "
                                     "--slice-figure")
-        roadmap, _, hit = _full_roadmap(args.cache_dir, progress)
+        roadmap, _, hit = _full_roadmap(args.cache_dir, progress, workers)
     else:
         if args.slice_figure:
             raise InvalidInputError("--slice-figure needs --full")
         grid = rho1_slice(args.rho1, tuple(args.rho2), tuple(args.rho3), args.step)
         check_roadmap_grid(PAPER_GEOMETRY, grid)
         roadmap, hit = build_roadmap(PAPER_GEOMETRY, grid, method=args.method,
-                                     progress=progress), False
+                                     progress=progress, workers=workers), False
     summary = roadmap_summary(roadmap)
     summary["cusps"] = [_in_degrees(c, roadmap.mechanism) for c in summary["cusps"]]
     world = None
@@ -274,7 +280,8 @@ def _roadmap(args, progress):
         from ..workspace.cusps import find_cusps
         from .figures import slice_figure
 
-        cusps = find_cusps(build_roadmap(PAPER_GEOMETRY, rho1_slice(args.slice_rho1, step=0.25)))
+        cusps = find_cusps(build_roadmap(PAPER_GEOMETRY, rho1_slice(args.slice_rho1, step=0.25),
+                                         workers=workers))
         _save(args.slice_figure, slice_figure(roadmap, {0: args.slice_rho1}, cusps))
     if args.output:
         _save(args.output, roadmap_to_json(roadmap))
@@ -373,14 +380,14 @@ def _applied(planner, scene, model, source):
         raise InvalidInputError(f"{source}: {exc}") from None
 
 
-def _plan(args, progress):
+def _plan(args, progress, workers):
     from .cache import cached_planning
 
     if args.full and args.step is not None:
         raise InvalidInputError("--step: the full 3-DOF roadmap's grid is its own")
     _paper_slice_options(args, ("rho1", "step"))
     if args.mechanism is not None:
-        return _plan_on_file(args, progress)
+        return _plan_on_file(args, progress, workers)
     if args.mode_tol is not None:
         raise InvalidInputError("--mode-tol needs --mechanism; the paper's 3-RPR takes "
                                 "--alpha-tol-deg")
@@ -392,18 +399,19 @@ def _plan(args, progress):
                 f"{'' if args.full else ' (rho1 is --rho1; --full plans with rho1 free)'}")
     options = _options(args, PAPER_GEOMETRY, math.radians(args.alpha_tol_deg))
     if args.full:
-        roadmap, index, _ = _full_roadmap(args.cache_dir, progress)
+        roadmap, index, _ = _full_roadmap(args.cache_dir, progress, workers)
         start, goal = args.start, args.goal
         roadmap_doc = {"mechanism": PAPER_GEOMETRY.to_dict(), "full": True}
     else:
         grid = rho1_slice(args.rho1, step=args.step)
-        roadmap, index, _ = cached_planning(PAPER_GEOMETRY, grid, args.cache_dir, progress)
+        roadmap, index, _ = cached_planning(PAPER_GEOMETRY, grid, args.cache_dir, progress,
+                                            workers=workers)
         start, goal = (args.rho1, *args.start), (args.rho1, *args.goal)
         roadmap_doc = {"mechanism": PAPER_GEOMETRY.to_dict(), "grid": grid.to_dict()}
     return _answer(args, progress, roadmap, index, start, goal, options, roadmap_doc)
 
 
-def _plan_on_file(args, progress):
+def _plan_on_file(args, progress, workers):
     from .cache import cached_planning
     from .mechanism_file import roadmap_grid
 
@@ -421,7 +429,7 @@ def _plan_on_file(args, progress):
     options = _options(args, mechanism, tolerance)
     base, refinement = roadmap_grid(grid)
     roadmap, index, _ = cached_planning(mechanism, base, args.cache_dir, progress,
-                                        refinement=refinement)
+                                        refinement=refinement, workers=workers)
     roadmap_doc = {"mechanism": mechanism.to_dict(), "grid": grid.to_dict()}
     return _answer(args, progress, roadmap, index, args.start, args.goal, options, roadmap_doc)
 
@@ -571,21 +579,21 @@ def _plan_scene(path, plan):
     return scene, model
 
 
-def _plot(args, progress):
+def _plot(args, progress, workers):
     from .cache import cached_planning
     from .figures import plan_figure
 
     mechanism, grid, plan = _read_plan(args.plan_file)
     in_scene = _plan_scene(args.plan_file, plan)
     if grid is None:
-        roadmap, index, _ = _full_roadmap(args.cache_dir, progress)
+        roadmap, index, _ = _full_roadmap(args.cache_dir, progress, workers)
     else:
         from .mechanism_file import roadmap_grid
 
         check_roadmap_grid(mechanism, grid)
         base, refinement = roadmap_grid(grid)
         roadmap, index, _ = cached_planning(mechanism, base, args.cache_dir, progress,
-                                            refinement=refinement)
+                                            refinement=refinement, workers=workers)
     world = None
     if in_scene is not None:
         from ..planning import Planner

@@ -8,7 +8,11 @@ The builds that can take seconds (:func:`compute_field`, :func:`segment`,
 keyword ``progress``, called as ``progress(stage, fraction)`` with the name
 of the running stage and the fraction of the call's work done
 (non-decreasing, in [0, 1]); the core never prints, its caller shows the
-progress (the command line on stderr, the builder node in its log).
+progress (the command line on stderr, the builder node in its log).  The
+first four also take ``workers``, a map-like callable such as
+``ThreadPoolExecutor.map`` that runs their chunks in parallel: the core
+starts no thread, its caller chooses (the command line and the nodes pass
+a thread pool's).
 Objects print a one-line summary, e.g. ``Roadmap(3-RPR: 7 regions, 24
 patches, 36 gates; ...)``.
 """

@@ -502,7 +502,7 @@ def coarse_base(grid, refinement=DEFAULT_REFINEMENT):
 
 
 def refine(mechanism, base, refinement=DEFAULT_REFINEMENT, min_margin=DEFAULT_REFINE_MARGIN, *,
-           progress=None):
+           progress=None, workers=map):
     """The adaptive grid of a base grid under the refinement rule (module doc).
 
     Parameters
@@ -518,6 +518,12 @@ def refine(mechanism, base, refinement=DEFAULT_REFINEMENT, min_margin=DEFAULT_RE
         Called as ``progress(stage, fraction)`` (the stage's name, the
         fraction of the work done) as the base field is solved and each
         axis' edges are checked.
+
+    workers : callable, optional
+        A map-like callable, ``workers(function, iterable)`` yielding the
+        results in order, such as ``ThreadPoolExecutor.map``: the base grid's field is solved
+        with it (:func:`~.field.compute_field`).  The
+        default, the builtin ``map``, works in the calling thread.
 
     Returns
     -------
@@ -538,7 +544,8 @@ def refine(mechanism, base, refinement=DEFAULT_REFINEMENT, min_margin=DEFAULT_RE
         raise InvalidInputError(f"min_margin must be finite and >= 0, got {min_margin}")
     AdaptiveGrid(base, refinement, ())  # validates before the field is computed
     report = part(progress, within="refinement")
-    field = compute_field(mechanism, base, progress=part(report, 0.0, 0.6, "base grid"))
+    field = compute_field(mechanism, base, progress=part(report, 0.0, 0.6, "base grid"),
+                          workers=workers)
     shape = base.shape
     blocks = _block_shape(base)
     periodic = np.array([a.periodic for a in base.axes])

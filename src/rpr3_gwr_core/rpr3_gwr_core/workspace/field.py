@@ -6,10 +6,8 @@ configuration space, or a slice of it (paper section 5: rho2, rho3 in
 (:mod:`~rpr3_gwr_core.mechanisms`) solves each cell.
 """
 
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 import functools
-import os
 
 import numpy as np
 
@@ -19,7 +17,6 @@ __all__ = ["NSolutionField", "compute_field"]
 
 
 _CHUNK = 8192
-_WORKERS = max(1, min(4, os.cpu_count() or 1))
 _REPORTS = 20
 
 
@@ -89,7 +86,7 @@ class NSolutionField:
         return out
 
 
-def compute_field(mechanism, grid, *, progress=None):
+def compute_field(mechanism, grid, *, progress=None, workers=map):
     """Solve the direct kinematics on every cell of a grid.
 
     Parameters
@@ -100,6 +97,12 @@ def compute_field(mechanism, grid, *, progress=None):
     progress : callable, optional
         Called as ``progress(stage, fraction)`` (the stage's name, the
         fraction of the work done) as chunks of cells are solved.
+    workers : callable, optional
+        A map-like callable, ``workers(function, iterable)`` yielding the
+        results in order, such as ``ThreadPoolExecutor.map``: the chunks of cells are solved
+        with it, in parallel with a thread pool's (numpy, LAPACK and the
+        mechanisms' compiled kernels release the interpreter's lock).  The
+        default, the builtin ``map``, works in the calling thread.
 
     Returns
     -------
@@ -123,8 +126,7 @@ def compute_field(mechanism, grid, *, progress=None):
     margin = np.full((grid.size, n), np.nan)
 
     # Chunks bound the temporaries of the root finder (they scale with cells)
-    # and keep every core busy: numpy, LAPACK and the mechanisms' compiled
-    # kernels release the GIL.
+    # and are what ``workers`` runs in parallel.
     def solve(start):
         rows = slice(start, start + _CHUNK)
         count[rows], poses[rows] = mechanism.solve(joints[rows])
@@ -135,11 +137,10 @@ def compute_field(mechanism, grid, *, progress=None):
 
     report = part(progress)
     starts = range(0, grid.size, _CHUNK)
-    with ThreadPoolExecutor(max_workers=_WORKERS) as pool:
-        # map yields in order in this thread: the callback never runs in a
-        # worker.  At most _REPORTS calls, which a log can take line by line.
-        for done, _ in enumerate(pool.map(solve, starts), 1):
-            if done * _REPORTS // len(starts) > (done - 1) * _REPORTS // len(starts):
-                report("n-solution field", done / len(starts))
+    # The results come in order in this thread: the callback never runs in
+    # a worker.  At most _REPORTS calls, which a log can take line by line.
+    for done, _ in enumerate(workers(solve, starts), 1):
+        if done * _REPORTS // len(starts) > (done - 1) * _REPORTS // len(starts):
+            report("n-solution field", done / len(starts))
     return NSolutionField(mechanism=mechanism, grid=grid, count=count, poses=poses,
                           margin=margin)

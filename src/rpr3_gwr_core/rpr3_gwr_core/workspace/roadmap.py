@@ -88,7 +88,8 @@ def aspect_groups(graph):
     return sorted((sorted(c) for c in nx.connected_components(graph)), key=lambda c: c[0])
 
 
-def build_roadmap(mechanism, grid, method="components", min_region_cells=8, progress=None):
+def build_roadmap(mechanism, grid, method="components", min_region_cells=8, progress=None, *,
+                  workers=map):
     """Build the global workspace roadmap of a mechanism on a grid.
 
     Parameters
@@ -105,6 +106,12 @@ def build_roadmap(mechanism, grid, method="components", min_region_cells=8, prog
         fraction of the build done (non-decreasing, ``("done", 1.0)``
         last), as the field's cells are solved and between the stages of
         the segmentation.
+
+    workers : callable, optional
+        A map-like callable, ``workers(function, iterable)`` yielding the
+        results in order, such as ``ThreadPoolExecutor.map``: the field and the segmentation
+        work with it (:func:`~.field.compute_field`, :func:`~.segmentation.segment`).  The
+        default, the builtin ``map``, works in the calling thread.
 
     Returns
     -------
@@ -126,11 +133,11 @@ def build_roadmap(mechanism, grid, method="components", min_region_cells=8, prog
     timings = {}
     start = perf_counter()
     report("n-solution field", 0.0)
-    field = compute_field(mechanism, grid, progress=part(progress, 0.0, 0.4))
+    field = compute_field(mechanism, grid, progress=part(progress, 0.0, 0.4), workers=workers)
     timings["field"] = perf_counter() - start
     start = perf_counter()
     segmentation = segment(field, method=method, min_region_cells=min_region_cells,
-                           progress=part(progress, 0.4, 0.99))
+                           progress=part(progress, 0.4, 0.99), workers=workers)
     timings["segmentation"] = perf_counter() - start
     report("graph", 0.99)
     start = perf_counter()

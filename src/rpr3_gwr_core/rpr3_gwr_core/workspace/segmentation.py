@@ -50,7 +50,6 @@ labels the same connected sets with ``scipy.sparse.csgraph`` and is tested to
 give identical patches, gates and boundaries.
 """
 
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field as dataclass_field
 import functools
 
@@ -436,7 +435,7 @@ def _checked_tables(field, region, patch, tables):
     return t
 
 
-def segment(field, method="components", min_region_cells=8, *, progress=None):
+def segment(field, method="components", min_region_cells=8, *, progress=None, workers=map):
     """Split a field into regions, patches and gates.
 
     Parameters
@@ -450,6 +449,13 @@ def segment(field, method="components", min_region_cells=8, *, progress=None):
         Called as ``progress(stage, fraction)`` (the stage's name, the
         fraction of the work done) between stages.
 
+    workers : callable, optional
+        A map-like callable, ``workers(function, iterable)`` yielding the
+        results in order, such as ``ThreadPoolExecutor.map``: the solutions are matched across
+        the faces of each axis with it, the axes in parallel with a thread
+        pool's (numpy releases the interpreter's lock).  The
+        default, the builtin ``map``, works in the calling thread.
+
     Returns
     -------
     Segmentation
@@ -461,9 +467,7 @@ def segment(field, method="components", min_region_cells=8, *, progress=None):
     report = part(progress)
     report("continuity across faces", 0.0)
     pairs = field.grid.pairs()
-    # One thread per axis: the work is numpy's, which releases the GIL.
-    with ThreadPoolExecutor(max_workers=len(pairs)) as pool:
-        matches = list(pool.map(lambda pair: match_solutions(field, *pair), pairs))
+    matches = list(workers(lambda pair: match_solutions(field, *pair), pairs))
     links = [(lo, up, match) for (lo, up), match in zip(pairs, matches)]
     report("regions", 0.7)
     region = _regions(field, links, int(min_region_cells))
