@@ -122,3 +122,13 @@ def test_the_command_line_shows_progress_on_stderr_only(argv, monkeypatch, capsy
     lines = err.splitlines()
     assert lines and all(line.startswith("rpr3-gwr: [") for line in lines)
     assert any("n-solution field" in line for line in lines)
+
+
+def test_drawing_a_roadmaps_figures_is_shown(monkeypatch, capsys, tmp_path):
+    monkeypatch.setattr(commands._Progress, "DELAY", 0.0)
+    field, roadmap = tmp_path / "field.png", tmp_path / "roadmap.png"
+    assert main(["roadmap", "--step", "0.5", "--field-figure", str(field),
+                 "--roadmap-figure", str(roadmap)]) == 0
+    err = capsys.readouterr().err
+    assert f"drawing {field}" in err and f"drawing {roadmap}" in err
+    assert field.exists() and roadmap.exists()

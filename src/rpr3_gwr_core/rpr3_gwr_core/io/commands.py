@@ -290,9 +290,12 @@ def _roadmap(args, progress, workers):
     if args.field_figure or args.roadmap_figure:
         from .figures import field_figure, roadmap_figure
 
+        # Drawing takes as long as a slice's build: the progress names it.
         if args.field_figure:
+            progress(f"drawing {args.field_figure}", 1.0)
             _save(args.field_figure, field_figure(roadmap, world))
         if args.roadmap_figure:
+            progress(f"drawing {args.roadmap_figure}", 1.0)
             _save(args.roadmap_figure, roadmap_figure(roadmap))
     return summary
 
