@@ -12,7 +12,8 @@ import pytest
 from scipy import sparse
 from scipy.sparse.csgraph import connected_components
 
-from rpr3_gwr_core import PAPER_GEOMETRY, InfeasiblePathError, Planner, aspect_groups
+from rpr3_gwr_core import (PAPER_GEOMETRY, InfeasiblePathError, Planner, PlanOptions,
+                           aspect_groups)
 from rpr3_gwr_core.io.cli import main
 from rpr3_gwr_core.paper import FULL_BASE_GRID, rho1_slice
 from rpr3_gwr_core.planning.validation import validate_path
@@ -104,6 +105,17 @@ def test_the_pocket_needs_rho1_to_move(full_roadmap, planner):
     assert np.ptp(plan.joints[:, 0]) > 1.0
     check = validate_path(PAPER_GEOMETRY, plan.joints, plan.poses[0], plan.poses[-1])
     assert check.ok
+
+
+def test_the_chosen_global_path_is_the_patches_the_smoothed_pocket_path_crosses(planner):
+    start, goal = (*POCKET_LEGS, POCKET_ALPHAS[0]), (*POCKET_LEGS, POCKET_ALPHAS[1])
+    plan = planner.plan(start, goal, PlanOptions(smooth=True))
+    assert plan.smoothed
+    crossed = [int(p) for k, p in enumerate(plan.patches) if k == 0 or p != plan.patches[k - 1]]
+    chosen = list(plan.global_paths[plan.path_index].patches)
+    assert chosen == crossed
+    # Not the weave of the unsmoothed cells along a gate.
+    assert all(len(p.patches) <= 4 for p in plan.global_paths)
 
 
 def test_configurations_of_one_aspect_plan_with_all_legs_moving(planner):

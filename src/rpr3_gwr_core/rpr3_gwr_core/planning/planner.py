@@ -406,9 +406,6 @@ class Planner:
         if found is None:
             found = self._along_global_paths(paths, s, g, options.clearance, termination, world)
         path, result, joints, patches = found
-        if path.patches not in {p.patches for p in paths}:
-            paths.append(path)
-        path_index = next(k for k, p in enumerate(paths) if p.patches == path.patches)
         smoothed = False
         if options.smooth and len(joints) > 2 and not self.roadmap.grid.fixed:
             taut = self._pulled_taut(joints, patches, result, s, g, options.clearance,
@@ -423,6 +420,18 @@ class Planner:
             if rounded is not None:
                 result, joints, patches = rounded
                 smoothed = True
+        if path.patches not in {p.patches for p in paths}:
+            # A path of the searches that cross any gate: its cells may weave
+            # along a gate, in and out of two patches, where the trajectory
+            # crosses the patches of its waypoints (when gates join them: a
+            # smoothed segment may pass through a patch that has no waypoint).
+            crossed = tuple(int(p) for k, p in enumerate(patches) if k == 0 or p != patches[k - 1])
+            if all(self.global_index.weighted.has_edge(a, b)
+                   for a, b in zip(crossed, crossed[1:])):
+                path = GlobalPath(crossed, self.global_index.path_cost(crossed))
+            if path.patches not in {p.patches for p in paths}:
+                paths.append(path)
+        path_index = next(k for k, p in enumerate(paths) if p.patches == path.patches)
         timing = (None, None, None)
         if options.max_velocity is not None:
             timing = time_parameterize(joints, options.max_velocity, options.max_acceleration)
