@@ -25,7 +25,7 @@ from rpr3_gwr_core.exceptions import InvalidInputError
 from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
 from rpr3_gwr_core.mechanisms import (DEFAULT_THREE_PRR, Mechanism, ThreePRR,
                                       mechanism_from_dict)
-from rpr3_gwr_core.mechanisms.prr3 import _step_kernel
+from rpr3_gwr_core.mechanisms.rrr3 import _step_kernel
 from rpr3_gwr_core.planning.planner import Planner
 from rpr3_gwr_core.workspace.grid import Axis, Grid
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
@@ -180,7 +180,7 @@ def test_step_follows_each_solution():
 def test_compiled_step_kernel_agrees_with_step_and_predict_and_correct():
     m = DEFAULT_THREE_PRR
     target = np.array(Q_CHANGE) + 0.05
-    for pose in check_kernel_agrees_with_step(m, _step_kernel, Q_CHANGE, target, 14):
+    for pose in check_kernel_agrees_with_step(m, _step_kernel, Q_CHANGE, target, 19):
         expected = m.step(pose, Q_CHANGE, target)
         corrected = m.correct(m.predict(pose, np.array(Q_CHANGE), target), target, 6)
         assert np.allclose(corrected, expected[0], atol=1e-9)

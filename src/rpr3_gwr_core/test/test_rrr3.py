@@ -184,7 +184,7 @@ def test_step_follows_each_solution():
 
 
 def test_compiled_step_kernel_agrees_with_step():
-    check_kernel_agrees_with_step(DEFAULT_THREE_RRR, _step_kernel, Q6, np.array(Q6) + 0.01, 12)
+    check_kernel_agrees_with_step(DEFAULT_THREE_RRR, _step_kernel, Q6, np.array(Q6) + 0.01, 19)
 
 
 def test_batch_predict_and_correct():

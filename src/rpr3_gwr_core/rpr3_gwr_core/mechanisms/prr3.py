@@ -24,73 +24,15 @@ one.  The pose alone does not fix the slider joints, so
 """
 
 from dataclasses import dataclass
-import functools
 import math
 import numbers
 
-import numba
-import numpy as np
-from numba.extending import register_jitable
-
 from ..exceptions import InvalidInputError
-from .base import STEP_KERNEL_SIGNATURE, positive_length, register_mechanism
-from .rpr3 import _adjugate_product, _corrected, _row_terms, beta_from_sides
+from .base import positive_length, register_mechanism
+from .rpr3 import beta_from_sides
 from .rrr3 import _MovingBaseRPR
 
 __all__ = ["ThreePRR", "DEFAULT_THREE_PRR"]
-
-
-@register_jitable
-def _slider_parameters(parameters, s1, s2, s3):
-    """The 3-RPR parameters whose base points are the slider joints of ``(s1, s2, s3)``."""
-    a1x, a1y, a2x, a2y, a3x, a3y, d1, d3, beta, g1, g2, g3, _ = parameters
-    return (a1x + s1 * np.cos(g1), a1y + s1 * np.sin(g1), a2x + s2 * np.cos(g2),
-            a2y + s2 * np.sin(g2), a3x + s3 * np.cos(g3), a3y + s3 * np.sin(g3), d1, d3, beta)
-
-
-@register_jitable
-def _slider_rates(rows, parameters):
-    """``u_i . (cos gamma_i, sin gamma_i)``, the diagonal of ``-Jq / 2``."""
-    u1x, u1y, u2x, u2y, _, u3x, u3y, _ = rows
-    g1, g2, g3 = parameters[9], parameters[10], parameters[11]
-    return (np.cos(g1) * u1x + np.sin(g1) * u1y, np.cos(g2) * u2x + np.sin(g2) * u2y,
-            np.cos(g3) * u3x + np.sin(g3) * u3y)
-
-
-@numba.njit(cache=True)
-def _compiled_step(parameters, scale, x, y, alpha, a1, a2, a3, b1, b2, b3):
-    """One predictor-corrector step from joints ``(a1, a2, a3)`` to
-    ``(b1, b2, b3)``: ``(converged, x, y, alpha, margin)``."""
-    leg = parameters[12]
-    rows = _row_terms(x, y, alpha, _slider_parameters(parameters, a1, a2, a3))
-    v1, v2, v3 = _slider_rates(rows, parameters)
-    q1, q2, q3 = b1 - a1, b2 - a2, b3 - a3
-    (dx, dy, da), det = _adjugate_product(rows, v1 * q1, v2 * q2, v3 * q3)
-    if det == 0.0:
-        return False, x, y, alpha, 0.0
-    px, py, palpha = x + dx / det, y + dy / det, alpha + da / det
-    # As the 3-RRR's: the corrector's move is measured against the
-    # predictor's or the slider joints' move, whichever is longer, so that a
-    # serial singularity (a leg perpendicular to its slider) is crossed.
-    predicted = max(math.sqrt((dx / det) ** 2 + (dy / det) ** 2 + (da / det * scale) ** 2),
-                    max(abs(q1), abs(q2), abs(q3)))
-    return _corrected(_slider_parameters(parameters, b1, b2, b3), (leg, leg, leg), scale, px,
-                      py, palpha, predicted)
-
-
-@numba.njit(STEP_KERNEL_SIGNATURE, cache=True)
-def _step_kernel(parameters, pose, joints_from, joints_to):
-    """:func:`_compiled_step` as :data:`~.base.STEP_KERNEL_SIGNATURE` takes
-    it; ``parameters`` are :attr:`ThreePRR.parameters`, then the scale."""
-    p = parameters
-    ok, x, y, alpha, margin = _compiled_step(
-        (p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12]),
-        p[13], pose[0], pose[1], pose[2], joints_from[0], joints_from[1], joints_from[2],
-        joints_to[0], joints_to[1], joints_to[2])
-    if not ok:
-        return np.nan
-    pose[0], pose[1], pose[2] = x, y, alpha
-    return margin
 
 
 @register_mechanism("3-PRR")
@@ -169,35 +111,16 @@ class ThreePRR(_MovingBaseRPR):
             object.__setattr__(self, name, float(value))
         object.__setattr__(self, "l", positive_length(self.l, "l"))
 
-    @functools.cached_property
-    def parameters(self):
-        """``(a1x, a1y, a2x, a2y, a3x, a3y, d1, d3, beta, gamma1, gamma2, gamma3,
-        l)``: the geometry as the constraint equations (and their compiled
-        form) take it."""
-        return (*self.a1, *self.a2, *self.a3, self.d1, self.d3, self.beta, self.gamma1,
-                self.gamma2, self.gamma3, self.l)
-
     @property
     def distal(self):
         """The legs' length of the 3-RPR it reduces to: ``l``."""
         return self.l
 
-    _base_parameters = staticmethod(_slider_parameters)
-    _compiled_step = staticmethod(_compiled_step)
-    _step_kernel = staticmethod(_step_kernel)
-
-    def _directions(self, base):
-        # Each slider moves its joint along its own direction.
-        return np.broadcast_to(self._slider_directions.reshape((6,) + (1,) * np.ndim(base[0])),
-                               (6,) + np.shape(base[0]))
-
-    @functools.cached_property
-    def _slider_directions(self):
-        return np.array([f(g) for g in (self.gamma1, self.gamma2, self.gamma3)
-                         for f in (math.cos, math.sin)])
-
-    def _change(self, joints_from, joints_to):
-        return joints_to - joints_from
+    @property
+    def _actuation(self):
+        # Sliders along the unit vectors (cos gamma_i, sin gamma_i).
+        return (0.0, 1.0, *(f(g) for g in (self.gamma1, self.gamma2, self.gamma3)
+                            for f in (math.cos, math.sin)))
 
     def slider_joints(self, joints):
         """Slider joints ``C_i = A_i + s_i (cos gamma_i, sin gamma_i)`` of

@@ -15,7 +15,9 @@ elbows and whose legs all have length ``l2``: its direct kinematics is the
 3-RPR's sextic, solved by the 3-RPR's batch solver with base points per
 joint vector (:func:`~.rpr3.solve_with_bases`), so at most six solutions.
 That reduction (:class:`_MovingBaseRPR`) is shared with the 3-PRR
-(:mod:`.prr3`), whose base points are its slider joints.
+(:mod:`.prr3`), whose base points are its slider joints: one set of
+compiled kernels serves both, told by the mechanism's parameters whether
+the joints turn or slide the base points.
 
 Parallel singularities are ``det Jx = 0``; the margin normalises ``Jx`` as
 the 3-RPR's does.  A serial singularity (a leg stretched or folded, ``u_i``
@@ -68,17 +70,13 @@ class _MovingBaseRPR(Mechanism):
     and the 3-PRR (base points its slider joints) are such 3-RPRs.
 
     The direct kinematics, margin, predictor, corrector and residuals are the
-    3-RPR's with the moving base points ``C_i``; a subclass gives them by
+    3-RPR's with the moving base points ``C_i``, compiled once for every such
+    mechanism: the kernels below read how the ``C_i`` follow the joints from
+    :attr:`parameters`.  A subclass gives
 
-    * ``_base_parameters(parameters, q1, q2, q3)``: the 3-RPR parameters
-      ``(c1x, c1y, c2x, c2y, c3x, c3y, d1, d3, beta)`` of its joints (a
-      ``register_jitable`` function, as a staticmethod);
-    * ``_directions(base)``: ``dC_i/dq_i`` as rows ``(x1, y1, x2, y2, x3,
-      y3)`` (shape (6, ...)) from the 3-RPR parameters ``base`` of the
-      joints: ``u_i . dC_i/dq_i`` is the diagonal of ``-Jq / 2``;
-    * ``_change(joints_from, joints_to)``: the joints' change;
-    * ``distal``: the legs' length; ``parameters``: its geometry as a tuple;
-    * ``_compiled_step`` and ``_step_kernel``: its step compiled by numba;
+    * ``_actuation``: the tail ``(revolute, reach, e1x, e1y, e2x, e2y, e3x,
+      e3y)`` of :attr:`parameters`;
+    * ``distal``: the legs' length;
     * ``_moving_points``: what the margin's error message calls the ``C_i``.
 
     Subclasses are frozen dataclasses with the fields ``a1, a2, a3, d1, d3,
@@ -130,6 +128,21 @@ class _MovingBaseRPR(Mechanism):
         orientation column of ``Jx`` commensurable with positions."""
         return self.platform.scale
 
+    @functools.cached_property
+    def parameters(self):
+        """``(a1x, a1y, a2x, a2y, a3x, a3y, d1, d3, beta, distal, scale,
+        revolute, reach, e1x, e1y, e2x, e2y, e3x, e3y)``: the geometry as the
+        compiled kernels (and, as an array, :attr:`step_kernel`) take it.
+
+        ``revolute`` is 1.0 where each joint turns a proximal link of length
+        ``reach``, ``C_i = A_i + reach (cos q_i, sin q_i)`` (the ``e_i``
+        unused), and 0.0 where it slides ``C_i = A_i + q_i e_i`` along the
+        unit vector ``e_i`` (``reach`` 1): ``reach`` bounds how far [length
+        unit] a ``C_i`` moves per unit of its joint.
+        """
+        return (*self.a1, *self.a2, *self.a3, self.d1, self.d3, self.beta, self.distal,
+                self.scale, *self._actuation)
+
     def base_points(self, joints):
         """The moving base points ``C_i`` of joints ``(..., 3)``.
 
@@ -139,10 +152,8 @@ class _MovingBaseRPR(Mechanism):
             [length unit].
         """
         joints = finite_vectors(joints, "joints", 3)
-        c1x, c1y, c2x, c2y, c3x, c3y, *_ = self._base_parameters(
-            self.parameters, joints[..., 0], joints[..., 1], joints[..., 2])
-        return np.stack([np.stack([c1x, c1y], -1), np.stack([c2x, c2y], -1),
-                         np.stack([c3x, c3y], -1)], -2)
+        (rows,) = _rows(joints.shape, joints)
+        return _moving_bases(rows, self.parameters).reshape(joints.shape[:-1] + (3, 2))
 
     def body_outline(self, poses, joints):
         """Proximal links ``A_i C_i`` (the 3-PRR's slid part of its rail),
@@ -181,7 +192,7 @@ class _MovingBaseRPR(Mechanism):
         Parameters
         ----------
         joints : array_like, shape (n, 3)
-            ``(th1, th2, th3)`` [rad], finite.
+            ``(q1, q2, q3)`` [joint unit], finite.
 
         Returns
         -------
@@ -193,9 +204,9 @@ class _MovingBaseRPR(Mechanism):
         joints = finite_vectors(joints, "joints", 3)
         if joints.ndim != 2:
             raise InvalidInputError(f"joints must have shape (n, 3), got {joints.shape}")
-        legs = np.full(joints.shape, self.distal)
-        bases = self.base_points(joints)
-        count, poses = solve_with_bases(legs, bases, self.platform)
+        (rows,) = _rows(joints.shape, joints)
+        bases = _moving_bases(rows, self.parameters)
+        count, poses = solve_with_bases(np.full(joints.shape, self.distal), bases, self.platform)
         # Where two roots of the sextic are close the root finder leaves
         # their poses off the legs by up to about 1e-5 [length unit**2], even
         # when both are regular (two assembly modes at nearly one alpha); the
@@ -204,8 +215,7 @@ class _MovingBaseRPR(Mechanism):
         # restores full precision; a polished pose is kept only if it fits
         # better and stayed close (or nearer its start than any other
         # solution), so that Newton never trades one solution for another.
-        _polish(poses, count, bases.reshape(-1, 6).T, (self.d1, self.d3, self.beta), self.distal,
-                self.scale)
+        _polish(poses, count, bases, self.parameters)
         return count, poses
 
     def margin(self, poses, joints=None):
@@ -220,7 +230,7 @@ class _MovingBaseRPR(Mechanism):
         poses : array_like, shape (..., 3)
         joints : array_like, shape (..., 3)
             The joints of the poses (broadcast against them).  Required: the
-            pose alone does not fix the elbows.
+            pose alone does not fix the base points ``C_i``.
 
         Returns
         -------
@@ -238,11 +248,8 @@ class _MovingBaseRPR(Mechanism):
                 f"the {self.kind}'s margin needs the joints as well as the poses: a pose "
                 f"does not fix the {self._moving_points}, so the sign of det Jx is not a "
                 "function of the pose; call margin(poses, joints)")
-        poses, joints = np.broadcast_arrays(np.asarray(poses, dtype=float),
-                                            np.asarray(joints, dtype=float))
-        bases = _coordinates(self._moving_parameters(joints))
-        return _moving_margin(poses.reshape(-1, 3), bases, (self.d1, self.d3, self.beta),
-                              self.scale).reshape(poses.shape[:-1])[()]
+        shape, (poses, joints) = _batch(poses, joints)
+        return _moving_margin(poses, joints, self.parameters).reshape(shape[:-1])[()]
 
     def aspect(self, poses, joints=None):
         """``sign(margin)``: +1 or -1, 0 exactly on a singularity, int8, shape (...)."""
@@ -250,16 +257,9 @@ class _MovingBaseRPR(Mechanism):
 
     def predict(self, poses, joints_from, joints_to):
         """Euler step ``Jx dx = -Jq dq`` of poses ``(..., 3)`` for a change of
-        joints (the change as ``_change`` takes it: the short way round for
-        angles)."""
-        poses = np.asarray(poses, dtype=float)
-        joints_from = np.asarray(joints_from, dtype=float)
-        change = self._change(joints_from, np.asarray(joints_to, dtype=float))
-        poses, joints_from, change = np.broadcast_arrays(poses, joints_from, change)
-        base = self._moving_parameters(joints_from)
-        return _moving_euler(poses.reshape(-1, 3), _coordinates(base),
-                             self._directions(base).reshape(6, -1), change.reshape(-1, 3),
-                             (self.d1, self.d3, self.beta)).reshape(poses.shape)
+        joints (a revolute joint's the short way round)."""
+        shape, rows = _batch(poses, joints_from, joints_to)
+        return _moving_euler(*rows, self.parameters).reshape(shape)
 
     def correct(self, poses, joints, iterations):
         """Newton steps on the constraint equations at fixed joints.
@@ -276,12 +276,8 @@ class _MovingBaseRPR(Mechanism):
         ndarray, shape (..., 3)
             Corrected poses (alpha is not wrapped).
         """
-        poses, joints = np.broadcast_arrays(np.asarray(poses, dtype=float),
-                                            np.asarray(joints, dtype=float))
-        # The joints stay: their base points are computed once.
-        bases = _coordinates(self._moving_parameters(joints))
-        return _moving_newton(poses.reshape(-1, 3), bases, (self.d1, self.d3, self.beta),
-                              self.distal, int(iterations)).reshape(poses.shape)
+        shape, (poses, joints) = _batch(poses, joints)
+        return _moving_newton(poses, joints, self.parameters, int(iterations)).reshape(shape)
 
     def residual(self, poses, joints):
         """Constraint residuals ``F_i = |B_i - C_i|**2 - distal**2``.
@@ -291,14 +287,13 @@ class _MovingBaseRPR(Mechanism):
         ndarray, shape (..., 3)
             One per leg [length unit**2].
         """
-        rows = self._rows(poses, joints)
-        l2 = self.distal
-        return np.stack(np.broadcast_arrays(*_leg_residuals(rows, (l2, l2, l2))), axis=-1)
+        shape, (poses, joints) = _batch(poses, joints)
+        return _moving_residuals(poses, joints, self.parameters).reshape(shape)
 
     def step(self, pose, joints_from, joints_to):
         x, y, alpha = (float(v) for v in pose)
-        ok, x, y, alpha, margin = self._compiled_step(
-            self.parameters, self.scale, x, y, alpha, *(float(v) for v in joints_from),
+        ok, x, y, alpha, margin = _compiled_step(
+            self.parameters, x, y, alpha, *(float(v) for v in joints_from),
             *(float(v) for v in joints_to))
         return ((x, y, alpha), margin) if ok else None
 
@@ -306,30 +301,89 @@ class _MovingBaseRPR(Mechanism):
     def step_kernel(self):
         # Its address taken once: passing the dispatcher itself would look it
         # up, under numba's compiler lock, at every call.
-        compiled = CompileResultWAP(self._step_kernel.overloads[STEP_KERNEL_SIGNATURE.args])
+        compiled = CompileResultWAP(_step_kernel.overloads[STEP_KERNEL_SIGNATURE.args])
         # Typed once: numba would otherwise infer its type at every call.
         compiled._numba_type_ = types.FunctionType(STEP_KERNEL_SIGNATURE)
-        return compiled, np.array([*self.parameters, self.scale])
+        return compiled, np.array(self.parameters)
 
-    def _moving_parameters(self, joints):
-        """The 3-RPR parameters of joints ``(..., 3)`` (``_base_parameters``),
-        broadcast to their shape."""
-        joints = np.asarray(joints, dtype=float)
-        return self._base_parameters(self.parameters, joints[..., 0], joints[..., 1],
-                                     joints[..., 2])
 
-    def _rows(self, poses, joints):
-        poses = np.asarray(poses, dtype=float)
-        return _row_terms(poses[..., 0], poses[..., 1], poses[..., 2],
-                          self._moving_parameters(joints))
+def _batch(*arrays):
+    """Arrays of shape (..., 3) broadcast together: their shape, and each as
+    rows (:func:`_rows`)."""
+    arrays = [np.asarray(a, dtype=float) for a in arrays]
+    shape = np.broadcast_shapes(*(a.shape for a in arrays))
+    return shape, _rows(shape, *arrays)
+
+
+def _rows(shape, *arrays):
+    """Each float array broadcast to ``shape`` (..., 3), as rows (n, 3) that
+    are C-contiguous and writeable: the one layout the kernels are compiled
+    for.  An array already so is not copied."""
+    out = []
+    for a in arrays:
+        if a.shape != shape:
+            a = np.broadcast_to(a, shape)
+        out.append(np.require(a.reshape(-1, 3), requirements="CW"))
+    return out
+
+
+# The kernels: the 3-RPR's row arithmetic on the moving base points, one row
+# of a batch (or the one pose of a step) at a time, so that no temporary
+# scales with the batch.  ``geometry`` is :attr:`_MovingBaseRPR.parameters`;
+# a batch kernel types ``base`` with ``geometry[:9]`` before its loop, and
+# :func:`_row_rpr` replaces it at the first row.
+
+@register_jitable
+def _moving_rpr(geometry, q1, q2, q3):
+    """The 3-RPR parameters ``(c1x, c1y, c2x, c2y, c3x, c3y, d1, d3, beta)``
+    of joints ``(q1, q2, q3)``: its base points are the ``C_i``."""
+    (a1x, a1y, a2x, a2y, a3x, a3y, d1, d3, beta, _, _, revolute, reach,
+     e1x, e1y, e2x, e2y, e3x, e3y) = geometry
+    if revolute:
+        return (a1x + reach * np.cos(q1), a1y + reach * np.sin(q1), a2x + reach * np.cos(q2),
+                a2y + reach * np.sin(q2), a3x + reach * np.cos(q3), a3y + reach * np.sin(q3),
+                d1, d3, beta)
+    return (a1x + q1 * e1x, a1y + q1 * e1y, a2x + q2 * e2x, a2y + q2 * e2y, a3x + q3 * e3x,
+            a3y + q3 * e3y, d1, d3, beta)
 
 
 @register_jitable
-def _row_parameters(bases, r, platform):
-    """The 3-RPR parameters of column ``r`` of base coordinates (6, n),
-    rows ``(c1x, c1y, c2x, c2y, c3x, c3y)``, and a platform ``(d1, d3, beta)``."""
-    return (bases[0, r], bases[1, r], bases[2, r], bases[3, r], bases[4, r], bases[5, r],
-            *platform)
+def _row_rpr(geometry, joints, r, previous):
+    """:func:`_moving_rpr` of row ``r`` of joints (n, 3), or ``previous``,
+    that of row ``r - 1``, when the row repeats it: a batch's rows come
+    grouped by joints (a cell's solutions one after the other), and the
+    base points cost most of a row's sines and cosines."""
+    if r > 0 and joints[r, 0] == joints[r - 1, 0] and joints[r, 1] == joints[r - 1, 1] \
+            and joints[r, 2] == joints[r - 1, 2]:
+        return previous
+    return _moving_rpr(geometry, joints[r, 0], joints[r, 1], joints[r, 2])
+
+
+@register_jitable
+def _joint_rates(geometry, rows, base):
+    """``u_i . dC_i/dq_i``, the diagonal of ``-Jq / 2``, from the rows of
+    ``Jx / 2`` and the 3-RPR parameters ``base`` (:func:`_moving_rpr`) of the
+    joints."""
+    a1x, a1y, a2x, a2y, a3x, a3y = geometry[:6]
+    e1x, e1y, e2x, e2y, e3x, e3y = geometry[13:]
+    if geometry[11]:
+        # dC_i/dq_i is C_i - A_i turned a quarter, which spares the joints'
+        # sines and cosines.
+        c1x, c1y, c2x, c2y, c3x, c3y = base[:6]
+        e1x, e1y, e2x, e2y = a1y - c1y, c1x - a1x, a2y - c2y, c2x - a2x
+        e3x, e3y = a3y - c3y, c3x - a3x
+    u1x, u1y, u2x, u2y, _, u3x, u3y, _ = rows
+    return u1x * e1x + u1y * e1y, u2x * e2x + u2y * e2y, u3x * e3x + u3y * e3y
+
+
+@register_jitable
+def _joint_change(geometry, start, end):
+    """The change of a joint from ``start`` to ``end``: a revolute joint's
+    the short way round, in [-pi, pi]."""
+    change = end - start
+    if geometry[11]:
+        return change - 2 * np.pi * np.floor(change / (2 * np.pi) + 0.5)
+    return change
 
 
 @register_jitable
@@ -350,15 +404,27 @@ def _misfit(rows, legs):
 
 
 @numba.njit(cache=True, nogil=True)
-def _polish(poses, count, bases, platform, distal, scale):
+def _moving_bases(joints, geometry):
+    """:meth:`_MovingBaseRPR.base_points` of joints (n, 3), shape (n, 3, 2)."""
+    out = np.empty((joints.shape[0], 3, 2))
+    for r in range(joints.shape[0]):
+        base = _moving_rpr(geometry, joints[r, 0], joints[r, 1], joints[r, 2])
+        for k in range(6):
+            out[r, k // 2, k % 2] = base[k]
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _polish(poses, count, bases, geometry):
     """:meth:`_MovingBaseRPR.solve`'s polish, in place: Newton steps of each
     pose ``poses[r, :count[r]]`` (shape (n, 6, 3)) on the 3-RPR of base
-    coordinates ``bases[:, r]`` (shape (6, n)), platform ``(d1, d3, beta)`` and
-    legs ``distal``, kept if it fits the legs better and did not move to
-    another solution (the constants above)."""
+    points ``bases[r]`` (shape (n, 3, 2)), kept if it fits the legs better
+    and did not move to another solution (the constants above)."""
+    d1, d3, beta, distal, scale = geometry[6:11]
     legs = (distal, distal, distal)
     for r in range(poses.shape[0]):
-        parameters = _row_parameters(bases, r, platform)
+        parameters = (bases[r, 0, 0], bases[r, 0, 1], bases[r, 1, 0], bases[r, 1, 1],
+                      bases[r, 2, 0], bases[r, 2, 1], d1, d3, beta)
         for s in range(count[r]):
             x, y, alpha = poses[r, s, 0], poses[r, s, 1], poses[r, s, 2]
             rows = _row_terms(x, y, alpha, parameters)
@@ -391,61 +457,6 @@ def _another_within(poses, count, slot, x, y, alpha, reach, scale):
     return False
 
 
-def _coordinates(base):
-    """The base coordinates of 3-RPR parameters ``(c1x, c1y, ..., c3y,
-    ...)`` whose coordinates are arrays, as rows, shape (6, n): stacked
-    whole rows, far cheaper than interleaved points."""
-    return np.array(base[:6]).reshape(6, -1)
-
-
-@numba.njit(cache=True, nogil=True)
-def _moving_euler(poses, bases, directions, change, platform):
-    """:meth:`_MovingBaseRPR.predict` of poses (n, 3) on the 3-RPRs of base
-    coordinates ``bases`` (6, n), moving along ``directions`` (6, n) by
-    ``change`` (n, 3); ``platform`` is ``(d1, d3, beta)``."""
-    out = np.empty_like(poses)
-    for r in range(poses.shape[0]):
-        w, q = directions[:, r], change[r]
-        rows = _row_terms(poses[r, 0], poses[r, 1], poses[r, 2],
-                          _row_parameters(bases, r, platform))
-        u1x, u1y, u2x, u2y, _, u3x, u3y, _ = rows
-        (dx, dy, da), det = _adjugate_product(rows, (u1x * w[0] + u1y * w[1]) * q[0],
-                                              (u2x * w[2] + u2y * w[3]) * q[1],
-                                              (u3x * w[4] + u3y * w[5]) * q[2])
-        # A singular system leaves the pose, as the 3-RPR's _solve_rows does.
-        inv = 1.0 / det if det != 0.0 else 0.0
-        out[r, 0], out[r, 1] = poses[r, 0] + dx * inv, poses[r, 1] + dy * inv
-        out[r, 2] = poses[r, 2] + da * inv
-    return out
-
-
-@numba.njit(cache=True, nogil=True)
-def _moving_margin(poses, bases, platform, scale):
-    """:meth:`_MovingBaseRPR.margin` of poses (n, 3) on the 3-RPRs of base
-    coordinates ``bases`` (6, n) and platform ``(d1, d3, beta)``, shape (n,)."""
-    out = np.empty(poses.shape[0])
-    for r in range(poses.shape[0]):
-        out[r] = _rows_margin(_row_terms(poses[r, 0], poses[r, 1], poses[r, 2],
-                                         _row_parameters(bases, r, platform)), scale)
-    return out
-
-
-@numba.njit(cache=True, nogil=True)
-def _moving_newton(poses, bases, platform, distal, iterations):
-    """:meth:`_MovingBaseRPR.correct` of poses (n, 3) on the 3-RPRs of base
-    coordinates ``bases`` (6, n), platform ``(d1, d3, beta)`` and legs
-    ``distal``: ``iterations`` Newton steps each."""
-    legs = (distal, distal, distal)
-    out = np.empty_like(poses)
-    for r in range(poses.shape[0]):
-        parameters = _row_parameters(bases, r, platform)
-        x, y, alpha = poses[r, 0], poses[r, 1], poses[r, 2]
-        for _ in range(iterations):
-            x, y, alpha = _newton_step(_row_terms(x, y, alpha, parameters), legs, x, y, alpha)
-        out[r, 0], out[r, 1], out[r, 2] = x, y, alpha
-    return out
-
-
 @register_jitable
 def _pose_gap(x, y, alpha, x2, y2, alpha2, scale):
     """Distance of two poses, the orientations' short way round at ``scale``."""
@@ -454,67 +465,102 @@ def _pose_gap(x, y, alpha, x2, y2, alpha2, scale):
     return math.sqrt((x - x2) ** 2 + (y - y2) ** 2 + (turn * scale) ** 2)
 
 
-# The constraint equations are the 3-RPR's with the elbows as base points:
-# the 3-RPR's row arithmetic serves numpy batches and, compiled by numba,
-# the floats of the sequential continuation.
-
-@register_jitable
-def _elbow_parameters(parameters, t1, t2, t3):
-    """The 3-RPR parameters whose base points are the elbows of ``(t1, t2, t3)``."""
-    a1x, a1y, a2x, a2y, a3x, a3y, d1, d3, beta, l1, _ = parameters
-    return (a1x + l1 * np.cos(t1), a1y + l1 * np.sin(t1), a2x + l1 * np.cos(t2),
-            a2y + l1 * np.sin(t2), a3x + l1 * np.cos(t3), a3y + l1 * np.sin(t3), d1, d3, beta)
-
-
-@register_jitable
-def _joint_rates(rows, parameters, base):
-    """``u_i . dC_i/dth_i``, the diagonal of ``-Jq / 2``, from the elbows
-    ``base`` (:func:`_elbow_parameters`): ``dC_i/dth_i`` is ``C_i - A_i``
-    turned a quarter, which spares the joints' sines and cosines."""
-    u1x, u1y, u2x, u2y, _, u3x, u3y, _ = rows
-    a1x, a1y, a2x, a2y, a3x, a3y = parameters[:6]
-    c1x, c1y, c2x, c2y, c3x, c3y = base[:6]
-    return ((c1x - a1x) * u1y - (c1y - a1y) * u1x, (c2x - a2x) * u2y - (c2y - a2y) * u2x,
-            (c3x - a3x) * u3y - (c3y - a3y) * u3x)
+@numba.njit(cache=True, nogil=True)
+def _moving_euler(poses, joints_from, joints_to, geometry):
+    """:meth:`_MovingBaseRPR.predict` of poses (n, 3) from joints (n, 3) to
+    joints (n, 3)."""
+    out = np.empty_like(poses)
+    base = geometry[:9]
+    for r in range(poses.shape[0]):
+        base = _row_rpr(geometry, joints_from, r, base)
+        rows = _row_terms(poses[r, 0], poses[r, 1], poses[r, 2], base)
+        v1, v2, v3 = _joint_rates(geometry, rows, base)
+        (dx, dy, da), det = _adjugate_product(
+            rows, v1 * _joint_change(geometry, joints_from[r, 0], joints_to[r, 0]),
+            v2 * _joint_change(geometry, joints_from[r, 1], joints_to[r, 1]),
+            v3 * _joint_change(geometry, joints_from[r, 2], joints_to[r, 2]))
+        # A singular system leaves the pose, as the 3-RPR's _solve_rows does.
+        inv = 1.0 / det if det != 0.0 else 0.0
+        out[r, 0], out[r, 1] = poses[r, 0] + dx * inv, poses[r, 1] + dy * inv
+        out[r, 2] = poses[r, 2] + da * inv
+    return out
 
 
-@register_jitable
-def _turn_difference(change):
-    """Joint changes taken the short way round: in [-pi, pi]."""
-    return change - 2 * np.pi * np.floor(change / (2 * np.pi) + 0.5)
+@numba.njit(cache=True, nogil=True)
+def _moving_margin(poses, joints, geometry):
+    """:meth:`_MovingBaseRPR.margin` of poses (n, 3) at joints (n, 3), shape (n,)."""
+    out = np.empty(poses.shape[0])
+    base = geometry[:9]
+    for r in range(poses.shape[0]):
+        base = _row_rpr(geometry, joints, r, base)
+        out[r] = _rows_margin(_row_terms(poses[r, 0], poses[r, 1], poses[r, 2], base),
+                              geometry[10])
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _moving_newton(poses, joints, geometry, iterations):
+    """:meth:`_MovingBaseRPR.correct` of poses (n, 3) at joints (n, 3):
+    ``iterations`` Newton steps each."""
+    distal = geometry[9]
+    legs = (distal, distal, distal)
+    out = np.empty_like(poses)
+    base = geometry[:9]
+    for r in range(poses.shape[0]):
+        base = _row_rpr(geometry, joints, r, base)
+        x, y, alpha = poses[r, 0], poses[r, 1], poses[r, 2]
+        for _ in range(iterations):
+            x, y, alpha = _newton_step(_row_terms(x, y, alpha, base), legs, x, y, alpha)
+        out[r, 0], out[r, 1], out[r, 2] = x, y, alpha
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _moving_residuals(poses, joints, geometry):
+    """:meth:`_MovingBaseRPR.residual` of poses (n, 3) at joints (n, 3), shape (n, 3)."""
+    distal = geometry[9]
+    out = np.empty_like(poses)
+    base = geometry[:9]
+    for r in range(poses.shape[0]):
+        base = _row_rpr(geometry, joints, r, base)
+        out[r, 0], out[r, 1], out[r, 2] = _leg_residuals(
+            _row_terms(poses[r, 0], poses[r, 1], poses[r, 2], base), (distal, distal, distal))
+    return out
 
 
 @numba.njit(cache=True)
-def _compiled_step(parameters, scale, x, y, alpha, a1, a2, a3, b1, b2, b3):
+def _compiled_step(geometry, x, y, alpha, a1, a2, a3, b1, b2, b3):
     """One predictor-corrector step from joints ``(a1, a2, a3)`` to
     ``(b1, b2, b3)``: ``(converged, x, y, alpha, margin)``."""
-    l1, l2 = parameters[9], parameters[10]
-    base = _elbow_parameters(parameters, a1, a2, a3)
+    distal, scale, reach = geometry[9], geometry[10], geometry[12]
+    base = _moving_rpr(geometry, a1, a2, a3)
     rows = _row_terms(x, y, alpha, base)
-    v1, v2, v3 = _joint_rates(rows, parameters, base)
-    q1, q2, q3 = _turn_difference(b1 - a1), _turn_difference(b2 - a2), _turn_difference(b3 - a3)
+    v1, v2, v3 = _joint_rates(geometry, rows, base)
+    q1, q2, q3 = (_joint_change(geometry, a1, b1), _joint_change(geometry, a2, b2),
+                  _joint_change(geometry, a3, b3))
     (dx, dy, da), det = _adjugate_product(rows, v1 * q1, v2 * q2, v3 * q3)
     if det == 0.0:
         return False, x, y, alpha, 0.0
     px, py, palpha = x + dx / det, y + dy / det, alpha + da / det
     # The corrector's move is measured against the predictor's, or against
-    # the elbows' move if that is longer: where a leg is stretched or folded
-    # (a serial singularity, no obstacle) its joint moves the platform only
-    # to second order, and the predictor's move alone would refuse every
-    # step across it.
+    # the base points' move if that is longer: where a leg is stretched or
+    # folded, or perpendicular to its slider (a serial singularity, no
+    # obstacle), its joint moves the platform only to second order, and the
+    # predictor's move alone would refuse every step across it.
     predicted = max(math.sqrt((dx / det) ** 2 + (dy / det) ** 2 + (da / det * scale) ** 2),
-                    l1 * max(abs(q1), abs(q2), abs(q3)))
-    return _corrected(_elbow_parameters(parameters, b1, b2, b3), (l2, l2, l2), scale, px, py,
-                      palpha, predicted)
+                    reach * max(abs(q1), abs(q2), abs(q3)))
+    return _corrected(_moving_rpr(geometry, b1, b2, b3), (distal, distal, distal), scale, px,
+                      py, palpha, predicted)
 
 
 @numba.njit(STEP_KERNEL_SIGNATURE, cache=True)
 def _step_kernel(parameters, pose, joints_from, joints_to):
     """:func:`_compiled_step` as :data:`~.base.STEP_KERNEL_SIGNATURE` takes
-    it; ``parameters`` are :attr:`ThreeRRR.parameters`, then the scale."""
+    it; ``parameters`` are :attr:`_MovingBaseRPR.parameters`."""
     p = parameters
     ok, x, y, alpha, margin = _compiled_step(
-        (p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10]), p[11],
+        (p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12],
+         p[13], p[14], p[15], p[16], p[17], p[18]),
         pose[0], pose[1], pose[2], joints_from[0], joints_from[1], joints_from[2],
         joints_to[0], joints_to[1], joints_to[2])
     if not ok:
@@ -577,29 +623,15 @@ class ThreeRRR(_MovingBaseRPR):
         for name in ("l1", "l2"):
             object.__setattr__(self, name, positive_length(getattr(self, name), name))
 
-    @functools.cached_property
-    def parameters(self):
-        """``(a1x, a1y, a2x, a2y, a3x, a3y, d1, d3, beta, l1, l2)``: the geometry
-        as the constraint equations (and their compiled form) take it."""
-        return (*self.a1, *self.a2, *self.a3, self.d1, self.d3, self.beta, self.l1, self.l2)
-
     @property
     def distal(self):
         """The legs' length of the 3-RPR it reduces to: ``l2``."""
         return self.l2
 
-    _base_parameters = staticmethod(_elbow_parameters)
-    _compiled_step = staticmethod(_compiled_step)
-    _step_kernel = staticmethod(_step_kernel)
-
-    def _directions(self, base):
-        # dC_i/dth_i is C_i - A_i turned a quarter.
-        (a1x, a1y), (a2x, a2y), (a3x, a3y) = self.a1, self.a2, self.a3
-        c1x, c1y, c2x, c2y, c3x, c3y = base[:6]
-        return np.array([a1y - c1y, c1x - a1x, a2y - c2y, c2x - a2x, a3y - c3y, c3x - a3x])
-
-    def _change(self, joints_from, joints_to):
-        return _turn_difference(joints_to - joints_from)
+    @property
+    def _actuation(self):
+        # Revolute joints turning the proximal links l1.
+        return (1.0, self.l1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
     def elbows(self, joints):
         """Elbows ``C_i = A_i + l1 (cos th_i, sin th_i)`` of joints ``(..., 3)``.

@@ -22,6 +22,7 @@ root within about 1e-4 of the real axis, and a complete finder counts the
 same roots there, whatever its tolerance for nearly real ones.
 """
 
+import functools
 import math
 
 import numba
@@ -64,14 +65,63 @@ def sampled_roots(coeffs, samples, max_roots):
     coeffs = np.ascontiguousarray(coeffs, dtype=float)
     certified = np.zeros(len(coeffs), dtype=np.bool_)
     roots = np.full((len(coeffs), max_roots), np.nan)
-    _certify_rows(coeffs, int(samples), certified, roots)
+    _certify_rows(coeffs, _sampling(int(samples), coeffs.shape[1]), certified, roots)
     return certified, roots
 
 
+@functools.lru_cache(maxsize=8)
+def _sampling(samples, size):
+    """:func:`_sampling_tables`, built once per sampling and shared, read-only."""
+    tables = _sampling_tables(samples, size)
+    for table in tables:
+        table.flags.writeable = False
+    return tables
+
+
 @numba.njit(cache=True, nogil=True)
-def _evaluate(row, phi):
-    """``(f(phi), f'(phi))`` of one row of coefficients."""
-    c1, s1 = math.cos(phi), math.sin(phi)
+def _sampling_tables(samples, size):
+    """What the sampling of rows of ``size`` coefficients at ``samples``
+    points computes for every row alike: ``(basis, slope_basis, middles)``.
+
+    ``basis[m, i]`` and ``slope_basis[i, m]`` are the m-th basis function and
+    its derivative at ``phi_i``; ``middles[i, node]`` the cosine and sine of
+    the middle of a piece of interval i: node 1 is the interval, nodes
+    ``2 n`` and ``2 n + 1`` the halves of node n, down to ``_MAX_DEPTH``
+    halvings, each middle the very float :func:`_row_roots` computes.
+    """
+    h = 2.0 * math.pi / samples
+    basis = np.empty((size, samples))
+    slope_basis = np.zeros((samples, size))
+    for i in range(samples):
+        basis[0, i] = 1.0
+        for k in range(1, (size - 1) // 2 + 1):
+            basis[2 * k - 1, i] = math.cos(k * i * h)
+            basis[2 * k, i] = math.sin(k * i * h)
+            slope_basis[i, 2 * k - 1] = -k * basis[2 * k, i]
+            slope_basis[i, 2 * k] = k * basis[2 * k - 1, i]
+    nodes = 2**_MAX_DEPTH
+    middles = np.empty((samples, nodes, 2))
+    ends = np.empty((nodes, 2))
+    for i in range(samples):
+        ends[1, 0], ends[1, 1] = i * h, (i + 1) * h
+        for node in range(1, nodes):
+            a, b = ends[node, 0], ends[node, 1]
+            middle = 0.5 * (a + b)
+            middles[i, node, 0], middles[i, node, 1] = math.cos(middle), math.sin(middle)
+            if 2 * node < nodes:
+                ends[2 * node, 0], ends[2 * node, 1] = a, middle
+                ends[2 * node + 1, 0], ends[2 * node + 1, 1] = middle, b
+    return basis, slope_basis, middles
+
+
+# The helpers below are inlined into the loops over rows: a call that takes
+# an array counts its references, atomically, which cost as much as the
+# arithmetic.
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _evaluate(row, c1, s1):
+    """``(f(phi), f'(phi))`` of one row of coefficients, from ``cos phi`` and
+    ``sin phi``."""
     ck, sk = 1.0, 0.0
     value, slope = row[0], 0.0
     for k in range(1, (row.size + 1) // 2):
@@ -82,13 +132,13 @@ def _evaluate(row, phi):
     return value, slope
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, inline="always")
 def _polish(row, lo, hi, f_lo, f_hi):
     """The one root of ``row`` in ``[lo, hi]``, where f changes sign from
     ``f_lo`` to ``f_hi``."""
     phi = lo + (hi - lo) * f_lo / (f_lo - f_hi)
     for _ in range(_MAX_ITERATIONS):
-        value, slope = _evaluate(row, phi)
+        value, slope = _evaluate(row, math.cos(phi), math.sin(phi))
         if value == 0.0:
             return phi
         step = value / slope
@@ -126,90 +176,92 @@ def _apart(f_a, f_b, slope_a, slope_b, width, bound):
 
 
 @numba.njit(cache=True, nogil=True)
-def _settle(row, a, b, f_a, f_b, slope_a, slope_b, bound2, bound3, found, count, stack):
-    """Roots of ``row`` in ``[a, b]`` (f and f' given at both ends) appended
-    to ``found[count:]``, the interval halved until every piece passes a
-    test of the module doc; returns the new count, or -1 if a piece still
-    fails at ``_MAX_DEPTH``."""
-    depth = 0
-    pending = 0
-    while True:
-        width = b - a
-        if not _apart(f_a, f_b, slope_a, slope_b, width, bound2):
-            # The slopes' own chord test (their slopes unknown) shows f monotone.
-            if f_a * f_b < 0.0 and _apart(slope_a, slope_b, 0.0, 0.0, width, bound3):
-                if count == found.size:
+def _row_roots(row, values, sampling, found, stack):
+    """The roots of ``row``, sampled as ``values`` (``values[-1]`` repeating
+    ``values[0]``), written to ``found``: their number, or -1 if the row is
+    not certified.  An interval that the chord test does not settle is
+    halved until every piece passes a test of the module doc; -1 if a piece
+    still fails at ``_MAX_DEPTH``."""
+    _, slope_basis, middles = sampling
+    samples = values.size - 1
+    h = 2.0 * math.pi / samples
+    degree = (row.size - 1) // 2
+    bound2, bound3 = 0.0, 0.0
+    for k in range(1, degree + 1):
+        amplitude = math.hypot(row[2 * k - 1], row[2 * k])
+        bound2 += k * k * amplitude
+        bound3 += k * k * k * amplitude
+    band = _SAFETY * bound2 * h * h / 8
+    count = 0
+    for i in range(samples):
+        f_a, f_b = values[i], values[i + 1]
+        # Most pieces pass the chord test, which needs no slopes.
+        if f_a * f_b > 0.0 and min(abs(f_a), abs(f_b)) > band:
+            continue
+        j = (i + 1) % samples
+        slope_a, slope_b = 0.0, 0.0
+        for m in range(row.size):
+            slope_a += row[m] * slope_basis[i, m]
+            slope_b += row[m] * slope_basis[j, m]
+        a, b = i * h, (i + 1) * h
+        node = 1
+        pending = 0
+        while True:
+            width = b - a
+            if not _apart(f_a, f_b, slope_a, slope_b, width, bound2):
+                # The slopes' own chord test (their slopes unknown) shows f monotone.
+                if f_a * f_b < 0.0 and _apart(slope_a, slope_b, 0.0, 0.0, width, bound3):
+                    if count == found.size:
+                        return -1
+                    found[count] = _polish(row, a, b, f_a, f_b)
+                    count += 1
+                elif node >= middles.shape[1]:
                     return -1
-                found[count] = _polish(row, a, b, f_a, f_b)
-                count += 1
-            elif depth == _MAX_DEPTH:
-                return -1
-            else:
-                # Go on with the left half; the right one waits on the stack.
-                middle = 0.5 * (a + b)
-                f_middle, slope_middle = _evaluate(row, middle)
-                depth += 1
-                stack[pending] = middle, b, f_middle, f_b, slope_middle, slope_b, float(depth)
-                pending += 1
-                b, f_b, slope_b = middle, f_middle, slope_middle
-                continue
-        if pending == 0:
-            return count
-        pending -= 1
-        a, b, f_a, f_b = stack[pending, 0], stack[pending, 1], stack[pending, 2], stack[pending, 3]
-        slope_a, slope_b, depth = stack[pending, 4], stack[pending, 5], int(stack[pending, 6])
+                else:
+                    # Go on with the left half; the right one waits on the stack.
+                    middle = 0.5 * (a + b)
+                    f_middle, slope_middle = _evaluate(row, middles[i, node, 0],
+                                                       middles[i, node, 1])
+                    stack[pending] = (middle, b, f_middle, f_b, slope_middle, slope_b,
+                                      float(2 * node + 1))
+                    pending += 1
+                    b, f_b, slope_b, node = middle, f_middle, slope_middle, 2 * node
+                    continue
+            if pending == 0:
+                break
+            pending -= 1
+            a, b = stack[pending, 0], stack[pending, 1]
+            f_a, f_b = stack[pending, 2], stack[pending, 3]
+            slope_a, slope_b, node = stack[pending, 4], stack[pending, 5], int(stack[pending, 6])
+    return count
 
 
 @numba.njit(cache=True, nogil=True)
-def _certify_rows(coeffs, samples, certified, roots):
-    degree = (coeffs.shape[1] - 1) // 2
-    h = 2.0 * math.pi / samples
-    basis = np.empty((samples, coeffs.shape[1]))
-    slope_basis = np.zeros((samples, coeffs.shape[1]))
-    for i in range(samples):
-        basis[i, 0] = 1.0
-        for k in range(1, degree + 1):
-            basis[i, 2 * k - 1] = math.cos(k * i * h)
-            basis[i, 2 * k] = math.sin(k * i * h)
-            slope_basis[i, 2 * k - 1] = -k * basis[i, 2 * k]
-            slope_basis[i, 2 * k] = k * basis[i, 2 * k - 1]
+def _certify_rows(coeffs, sampling, certified, roots):
+    basis = sampling[0]
+    samples = basis.shape[1]
     values = np.empty(samples + 1)
     found = np.empty(roots.shape[1])
     # Depth-first halving keeps at most one right half pending per level.
     stack = np.empty((_MAX_DEPTH, 7))
     for r in range(coeffs.shape[0]):
         row = coeffs[r]
-        for i in range(samples):
-            value = 0.0
-            for m in range(row.size):
-                value += row[m] * basis[i, m]
-            values[i] = value
+        # Summed term by term, each sample in the order of a dot product
+        # with its basis row, but vectorised across the samples.
+        values[:] = 0.0
+        for m in range(row.size):
+            for i in range(samples):
+                values[i] += row[m] * basis[m, i]
         values[samples] = values[0]
-        bound2, bound3 = 0.0, 0.0
-        for k in range(1, degree + 1):
-            amplitude = math.hypot(row[2 * k - 1], row[2 * k])
-            bound2 += k * k * amplitude
-            bound3 += k * k * k * amplitude
-        band = _SAFETY * bound2 * h * h / 8
-        count = 0
-        for i in range(samples):
-            f_a, f_b = values[i], values[i + 1]
-            # Most pieces pass the chord test, which needs no slopes.
-            if f_a * f_b > 0.0 and min(abs(f_a), abs(f_b)) > band:
-                continue
-            j = (i + 1) % samples
-            slope_a, slope_b = 0.0, 0.0
-            for m in range(row.size):
-                slope_a += row[m] * slope_basis[i, m]
-                slope_b += row[m] * slope_basis[j, m]
-            count = _settle(row, i * h, (i + 1) * h, f_a, f_b, slope_a, slope_b, bound2, bound3,
-                            found, count, stack)
-            if count < 0:
-                break
+        count = _row_roots(row, values, sampling, found, stack)
         if count < 0:
             continue
         for m in range(count):
-            found[m] = math.pi - ((math.pi - found[m]) % (2.0 * math.pi))
-        found[:count].sort()
-        roots[r, :count] = found[:count]
+            root = math.pi - ((math.pi - found[m]) % (2.0 * math.pi))
+            # Sorted by insertion: a handful of roots.
+            k = m
+            while k > 0 and roots[r, k - 1] > root:
+                roots[r, k] = roots[r, k - 1]
+                k -= 1
+            roots[r, k] = root
         certified[r] = True
