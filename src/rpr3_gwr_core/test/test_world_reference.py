@@ -12,7 +12,7 @@ import scipy.sparse as sparse
 from scipy.sparse.csgraph import connected_components
 
 from gwr_cases import PAPER_EXAMPLES
-from rpr3_gwr_core.exceptions import CollisionError, InfeasiblePathError
+from rpr3_gwr_core.exceptions import CollisionError, InfeasiblePathError, ValidationError
 from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY as G
 from rpr3_gwr_core.planning.locate import locate
 from rpr3_gwr_core.paper import rho1_slice
@@ -450,3 +450,20 @@ def test_a_start_in_collision_is_refused_with_its_body(planner):
     data = {"obstacles": [{"id": "on_leg_2", "disc": {"center": on_leg_2, "radius": 0.2}}]}
     with pytest.raises(CollisionError, match="leg2.*on_leg_2|on_leg_2.*leg2"):
         planner.plan(start, EXAMPLE_1[1], world=planner.apply_scene(scene_from_dict(data)))
+
+
+def test_a_wall_thinner_than_a_cells_sweep_gets_no_path_through_it(planner, torus):
+    """A small disc on leg 1's circle, which every way of the first example
+    sweeps, blocks it on the torus; on the grid it lies between two
+    neighbouring cells' samples, so the parts on either side stay joined,
+    but every path is checked continuously: no plan goes through it."""
+    theta1, alpha, b, rho, pose, inside, sign = torus
+    at = math.radians(120.0)
+    data = {"obstacles": [{"id": "thin", "disc": {"center": [16.5 * math.cos(at),
+                                                              16.5 * math.sin(at)],
+                                                   "radius": 0.5}}]}
+    label = torus_components(inside & ~reference_blocked(b, data) & (sign != 0), sign)
+    ends = [torus_sample_of(PAPER_EXAMPLES[k], torus) for k in (0, 1)]
+    assert label[ends[0]] != label[ends[1]]
+    with pytest.raises((ValidationError, InfeasiblePathError)):
+        planner.plan(*EXAMPLE_1, world=planner.apply_scene(scene_from_dict(data)))
