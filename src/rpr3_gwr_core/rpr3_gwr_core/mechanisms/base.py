@@ -19,6 +19,7 @@ import abc
 import math
 import numbers
 
+import numba
 import numpy as np
 
 from ..exceptions import InvalidInputError
@@ -301,9 +302,86 @@ class Mechanism(abc.ABC):
 
     def pose_distance(self, a, b):
         """Euclidean norm of :meth:`pose_difference` [length unit], shape (...)."""
-        return np.linalg.norm(self.pose_difference(a, b), axis=-1)
+        a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+        shape = np.broadcast_shapes(a.shape, b.shape)
+        a, b = np.broadcast_to(a, shape), np.broadcast_to(b, shape)
+        size = shape[-1]
+        distance = _pose_distances(a.reshape(-1, size), b.reshape(-1, size),
+                                   np.array(self.angular, dtype=bool), float(self.scale))
+        return distance.reshape(shape[:-1])[()]
+
+    def separation(self, poses, count):
+        """Distance (:meth:`pose_distance`) from each solution of a cell to the
+        nearest other solution of that cell.
+
+        Parameters
+        ----------
+        poses : ndarray, shape (n, max_solutions, pose_size)
+            Solutions of n cells, as :meth:`solve` gives them.
+        count : ndarray of int, shape (n,)
+            Number of solutions of each cell.
+
+        Returns
+        -------
+        ndarray, shape (n, max_solutions)
+            inf for a cell's only solution, NaN beyond ``count``.
+        """
+        return _separation(np.asarray(poses, dtype=float), np.asarray(count),
+                           np.array(self.angular, dtype=bool), float(self.scale))
 
     def wrap_scalar(self, pose):
         """One pose (sequence of floats) with its angles wrapped, as a tuple."""
         return tuple(math.atan2(math.sin(v), math.cos(v)) if angle else float(v)
                      for v, angle in zip(pose, self.angular))
+
+
+@numba.njit(cache=True, nogil=True)
+def _distance(a, b, angular, scale):
+    """:meth:`Mechanism.pose_distance` of two poses, ``angular`` per coordinate.
+
+    The operations are :meth:`Mechanism.pose_difference`'s and the norm's,
+    in their order (squares summed from the first coordinate on), so the
+    distance is numpy's to the bit.
+    """
+    total = 0.0
+    for k in range(a.size):
+        difference = a[k] - b[k]
+        if angular[k]:
+            turned = np.pi - difference
+            # The remainder of a value within a turn is exact: the value, or
+            # the value plus a turn; fmod, slow, only for the others.
+            if not abs(turned) < 2 * np.pi:
+                turned = np.remainder(turned, 2 * np.pi)
+            elif turned < 0:
+                turned += 2 * np.pi
+            difference = (np.pi - turned) * scale
+        total += difference * difference
+    return math.sqrt(total)
+
+
+@numba.njit(cache=True, nogil=True)
+def _pose_distances(a, b, angular, scale):
+    """:func:`_distance` of the rows of ``a`` and ``b``, shape (n, pose_size):
+    continuity and the field ask for millions, and numpy's temporaries cost
+    more than the arithmetic."""
+    out = np.empty(a.shape[0])
+    for r in range(a.shape[0]):
+        out[r] = _distance(a[r], b[r], angular, scale)
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _separation(poses, count, angular, scale):
+    """:meth:`Mechanism.separation` of checked arrays."""
+    out = np.full(poses.shape[:2], np.nan)
+    for cell in range(poses.shape[0]):
+        for slot in range(count[cell]):
+            nearest = np.inf
+            for other in range(count[cell]):
+                if other != slot:
+                    distance = _distance(poses[cell, other], poses[cell, slot], angular, scale)
+                    # np.minimum's: a NaN, once met, stays.
+                    if nearest == nearest and not nearest <= distance:
+                        nearest = distance
+            out[cell, slot] = nearest
+    return out

@@ -860,6 +860,75 @@ def _moving_base_coefficients(bases, rho, platform):
     return out
 
 
+@numba.njit(cache=True, nogil=True)
+def _moving_base_linear(points, rho, rows, alpha, platform):
+    """The linear formula of :func:`_solve` for base points per row, root by
+    root: the arithmetic of :func:`_linear_terms` and :func:`_solve`, in
+    their order, so the poses are numpy's to the bit.
+
+    ``points`` has shape (n, 3, 2) [length unit], ``rho`` (n, 3) [length
+    unit]; root k is ``alpha[k]`` of row ``rows[k]``; ``platform`` is
+    ``(d1, d3, beta, d1**2, d3**2)``, the squares as :func:`_linear_terms`
+    takes them (Python's power, not a product).  Returns the candidate
+    poses (m, 3), the terms ``(A, B, D, E, g, h)`` (6, m) that
+    :func:`_degenerate_poses` takes, and per root whether it is regular
+    (``_DEGENERATE_TOL``) and whether it is to be polished (``_POLISH_TOL``).
+    """
+    d1, d3, beta, d1_squared, d3_squared = platform
+    m = alpha.size
+    candidate = np.empty((m, 3))
+    terms = np.empty((6, m))
+    regular = np.empty(m, dtype=np.bool_)
+    rough = np.empty(m, dtype=np.bool_)
+    for k in range(m):
+        row = rows[k]
+        # Leg 1 at the origin, as in _linear_terms.
+        a1x, a1y = points[row, 0, 0], points[row, 0, 1]
+        a2x, a2y = points[row, 1, 0] - a1x, points[row, 1, 1] - a1y
+        a3x, a3y = points[row, 2, 0] - a1x, points[row, 2, 1] - a1y
+        c1, s1 = math.cos(alpha[k]), math.sin(alpha[k])
+        c3, s3 = math.cos(alpha[k] + beta), math.sin(alpha[k] + beta)
+        big_a = -2 * a2x + 2 * d1 * c1
+        big_b = -2 * a2y + 2 * d1 * s1
+        big_c = d1_squared + a2x * a2x + a2y * a2y - 2 * d1 * (a2x * c1 + a2y * s1)
+        big_d = -2 * a3x + 2 * d3 * c3
+        big_e = -2 * a3y + 2 * d3 * s3
+        big_f = d3_squared + a3x * a3x + a3y * a3y - 2 * d3 * (a3x * c3 + a3y * s3)
+        r1, r2, r3 = rho[row, 0], rho[row, 1], rho[row, 2]
+        g = r2 * r2 - r1 * r1 - big_c
+        h = r3 * r3 - r1 * r1 - big_f
+        delta = big_a * big_e - big_b * big_d
+        scale = abs(big_a * big_e) + abs(big_b * big_d) + 1.0
+        regular[k] = abs(delta) > _DEGENERATE_TOL * scale
+        rough[k] = abs(delta) < _POLISH_TOL * scale
+        safe = delta if regular[k] else 1.0
+        candidate[k, 0] = (big_e * g - big_b * h) / safe + a1x
+        candidate[k, 1] = (big_a * h - big_d * g) / safe + a1y
+        candidate[k, 2] = alpha[k]
+        terms[0, k], terms[1, k], terms[2, k] = big_a, big_b, big_d
+        terms[3, k], terms[4, k], terms[5, k] = big_e, g, h
+    return candidate, terms, regular, rough
+
+
+@numba.njit(cache=True, nogil=True)
+def _moving_base_fake(points, rho, rows, poses, platform, limit):
+    """Which poses miss their legs by more than ``limit``, as :func:`_solve`
+    judges them from :func:`_residuals` (a NaN residual is no miss), for
+    base points per row: pose k is of row ``rows[k]``, ``platform`` is
+    ``(d1, d3, beta)``."""
+    d1, d3, beta = platform
+    fake = np.empty(poses.shape[0], dtype=np.bool_)
+    for k in range(poses.shape[0]):
+        row = rows[k]
+        parameters = (points[row, 0, 0], points[row, 0, 1], points[row, 1, 0],
+                      points[row, 1, 1], points[row, 2, 0], points[row, 2, 1], d1, d3, beta)
+        e1, e2, e3 = _leg_residuals(_row_terms(poses[k, 0], poses[k, 1], poses[k, 2], parameters),
+                                    (rho[row, 0], rho[row, 1], rho[row, 2]))
+        fake[k] = (e1 == e1 and e2 == e2 and e3 == e3
+                   and (abs(e1) > limit or abs(e2) > limit or abs(e3) > limit))
+    return fake
+
+
 def _tan_half_matrix():
     """Map from trigonometric coefficients to the sextic in t = tan(phi / 2).
 
@@ -1001,7 +1070,8 @@ def _solve(rho, geometry):
     """:meth:`ThreeRPR.solve` of checked legs, shape (n, 3); ``geometry`` a
     :class:`ThreeRPR` or a :class:`_BasePerRow` of n rows."""
     n = rho.shape[0]
-    if isinstance(geometry, _BasePerRow):
+    moving = isinstance(geometry, _BasePerRow)
+    if moving:
         coeffs = _moving_base_coefficients(geometry.points, rho,
                                            (geometry.d1, geometry.d3, geometry.beta))
     else:
@@ -1013,33 +1083,40 @@ def _solve(rho, geometry):
         return np.zeros(n, dtype=np.uint8), poses
     a = alpha[rows, cols]
     r = rho[rows]
-    # From here on one entry per root: the base points of its row.
-    geometry = _take(geometry, rows)
-    big_a, big_b, big_c, big_d, big_e, big_f = _linear_terms(a, geometry)
-    g = r[:, 1] ** 2 - r[:, 0] ** 2 - big_c
-    h = r[:, 2] ** 2 - r[:, 0] ** 2 - big_f
-    delta = big_a * big_e - big_b * big_d
-    scale = np.abs(big_a * big_e) + np.abs(big_b * big_d) + 1.0
-    regular = np.abs(delta) > _DEGENERATE_TOL * scale
-    safe = np.where(regular, delta, 1.0)
-    x = (big_e * g - big_b * h) / safe
-    y = (big_a * h - big_d * g) / safe
-    ax, ay = geometry.a1
-    candidate = np.stack([x + ax, y + ay, a], axis=-1)
+    # From here on one entry per root: root k is of row rows[k].
+    if moving:
+        # One compiled pass: numpy's would copy every root's base points and
+        # take a dozen temporaries the size of the roots.
+        candidate, terms, regular, rough = _moving_base_linear(
+            geometry.points, rho, rows, a,
+            (geometry.d1, geometry.d3, geometry.beta, geometry.d1**2, geometry.d3**2))
+        big_a, big_b, big_d, big_e, g, h = terms
+    else:
+        big_a, big_b, big_c, big_d, big_e, big_f = _linear_terms(a, geometry)
+        g = r[:, 1] ** 2 - r[:, 0] ** 2 - big_c
+        h = r[:, 2] ** 2 - r[:, 0] ** 2 - big_f
+        delta = big_a * big_e - big_b * big_d
+        scale = np.abs(big_a * big_e) + np.abs(big_b * big_d) + 1.0
+        regular = np.abs(delta) > _DEGENERATE_TOL * scale
+        safe = np.where(regular, delta, 1.0)
+        x = (big_e * g - big_b * h) / safe
+        y = (big_a * h - big_d * g) / safe
+        ax, ay = geometry.a1
+        candidate = np.stack([x + ax, y + ay, a], axis=-1)
+        rough = np.abs(delta) < _POLISH_TOL * scale
     if not np.all(regular):
         candidate[~regular] = _degenerate_poses(
             r[~regular], a[~regular], rows[~regular], big_a[~regular], big_b[~regular],
             big_d[~regular], big_e[~regular], g[~regular], h[~regular],
-            _take(geometry, ~regular))
+            _take(geometry, rows[~regular]))
     # Near a degenerate orientation the linear formula loses digits, and the
     # circle construction is only a first guess: polish those poses with
     # Newton (safe there, a degenerate orientation is not a singular one), and
     # keep a polished pose only if it fits the legs better and, for a regular
     # root, stays close (next to a fold, Newton could wander off).
-    rough = np.abs(delta) < _POLISH_TOL * scale
     if np.any(rough):
         before = candidate[rough]
-        rough_geometry = _take(geometry, rough)
+        rough_geometry = _take(geometry, rows[rough])
         after = _newton(before, r[rough], rough_geometry, 3)
 
         def fit(p):
@@ -1051,8 +1128,12 @@ def _solve(rho, geometry):
     # A double root of the sextic at a degenerate orientation whose line of
     # B1 misses leg 1's circle is no pose at all (its B1 is complex): the
     # candidate built for it misses the legs by far more than rounding.
-    fake = np.max(np.abs(_residuals(candidate, r, geometry)), axis=-1) \
-        > _FAKE_RESIDUAL * geometry.scale**2
+    limit = _FAKE_RESIDUAL * geometry.scale**2
+    if moving:
+        fake = _moving_base_fake(geometry.points, rho, rows, candidate,
+                                 (geometry.d1, geometry.d3, geometry.beta), limit)
+    else:
+        fake = np.max(np.abs(_residuals(candidate, r, geometry)), axis=-1) > limit
     poses[rows, cols] = candidate
     poses[rows[fake], cols[fake]] = np.nan
     if np.any(fake):

@@ -70,18 +70,13 @@ class NSolutionField:
 
     @functools.cached_property
     def separation(self):
-        """Distance (:meth:`Mechanism.pose_distance`) from each solution to the
-        nearest other solution of its cell, shape (n_cells, max_solutions),
-        read-only: inf for a cell's only solution, NaN beyond ``count``."""
-        # Per cell once, rather than per face and direction by continuity.
-        out = np.where(self.valid, np.inf, np.nan)
-        for slot in range(self.max_solutions):
-            for other in range(self.max_solutions):
-                if other != slot:
-                    both = np.flatnonzero(self.count > max(slot, other))
-                    distance = self.mechanism.pose_distance(self.poses[both, other],
-                                                            self.poses[both, slot])
-                    out[both, slot] = np.minimum(out[both, slot], distance)
+        """:meth:`Mechanism.separation` of the solutions: the distance from
+        each to the nearest other solution of its cell, shape (n_cells,
+        max_solutions), read-only: inf for a cell's only solution, NaN beyond
+        ``count``."""
+        # Per cell once, rather than per face and direction by continuity;
+        # compute_field fills it chunk by chunk.
+        out = self.mechanism.separation(self.poses, self.count)
         out.flags.writeable = False
         return out
 
@@ -124,9 +119,12 @@ def compute_field(mechanism, grid, *, progress=None, workers=map):
     count = np.empty(grid.size, dtype=np.uint8)
     poses = np.empty((grid.size, n, mechanism.pose_size))
     margin = np.full((grid.size, n), np.nan)
+    separation = np.empty((grid.size, n))
 
     # Chunks bound the temporaries of the root finder (they scale with cells)
-    # and are what ``workers`` runs in parallel.
+    # and are what ``workers`` runs in parallel.  The separation is taken
+    # here, with the chunk's poses at hand, rather than by the first of the
+    # segmentation's threads while the others wait for it.
     def solve(start):
         rows = slice(start, start + _CHUNK)
         count[rows], poses[rows] = mechanism.solve(joints[rows])
@@ -134,6 +132,7 @@ def compute_field(mechanism, grid, *, progress=None, workers=map):
         margin[rows][valid] = mechanism.margin(
             poses[rows][valid], np.broadcast_to(joints[rows, None, :], valid.shape + (
                 mechanism.n_joints,))[valid])
+        separation[rows] = mechanism.separation(poses[rows], count[rows])
 
     report = part(progress)
     starts = range(0, grid.size, _CHUNK)
@@ -142,5 +141,8 @@ def compute_field(mechanism, grid, *, progress=None, workers=map):
     for done, _ in enumerate(workers(solve, starts), 1):
         if done * _REPORTS // len(starts) > (done - 1) * _REPORTS // len(starts):
             report("n-solution field", done / len(starts))
-    return NSolutionField(mechanism=mechanism, grid=grid, count=count, poses=poses,
-                          margin=margin)
+    field = NSolutionField(mechanism=mechanism, grid=grid, count=count, poses=poses,
+                           margin=margin)
+    separation.flags.writeable = False
+    field.__dict__["separation"] = separation
+    return field
