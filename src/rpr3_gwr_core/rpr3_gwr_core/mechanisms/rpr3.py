@@ -697,19 +697,21 @@ _CUSP_TOL = 1e-12
 def _cusp_equations(geometry, theta, alpha, rho1):
     """``(det d phi, grad(det d phi) . k)`` with ``k`` the unit kernel of d phi,
     and the squared legs ``(rho2**2, rho3**2)``."""
-    (a1x, a1y), a2, a3 = geometry.a1, np.array(geometry.a2), np.array(geometry.a3)
-    r = rho1 * np.array([math.cos(theta), math.sin(theta)])
-    t = rho1 * np.array([-math.sin(theta), math.cos(theta)])
-    b1 = np.array([a1x, a1y]) + r
+    # In scalars: Newton calls it thousands of times per slice, and numpy's
+    # two-element arrays would cost ten times the arithmetic.
+    rx, ry = rho1 * math.cos(theta), rho1 * math.sin(theta)
+    tx, ty = -ry, rx
+    b1x, b1y = geometry.a1[0] + rx, geometry.a1[1] + ry
     rows, d_theta, d_alpha, legs = [], [], [], []
-    for a, d, phase in ((a2, geometry.d1, alpha), (a3, geometry.d3, alpha + geometry.beta)):
-        e = d * np.array([math.cos(phase), math.sin(phase)])
-        e_prime = d * np.array([-math.sin(phase), math.cos(phase)])
-        u = b1 + e - a
-        rows.append((2 * u @ t, 2 * u @ e_prime))
-        d_theta.append((2 * (rho1 * rho1 - u @ r), 2 * e_prime @ t))
-        d_alpha.append((2 * t @ e_prime, 2 * (d * d - u @ e)))
-        legs.append(u @ u)
+    for (ax, ay), d, phase in ((geometry.a2, geometry.d1, alpha),
+                               (geometry.a3, geometry.d3, alpha + geometry.beta)):
+        ex, ey = d * math.cos(phase), d * math.sin(phase)
+        qx, qy = -ey, ex  # e', the derivative of e in the phase
+        ux, uy = b1x + ex - ax, b1y + ey - ay
+        rows.append((2 * (ux * tx + uy * ty), 2 * (ux * qx + uy * qy)))
+        d_theta.append((2 * (rho1 * rho1 - (ux * rx + uy * ry)), 2 * (qx * tx + qy * ty)))
+        d_alpha.append((2 * (tx * qx + ty * qy), 2 * (d * d - (ux * ex + uy * ey))))
+        legs.append(ux * ux + uy * uy)
     (a, b), (c, d) = rows
     det = a * d - b * c
 
@@ -717,35 +719,37 @@ def _cusp_equations(geometry, theta, alpha, rho1):
         (pa, pb), (pc, pd) = partial
         return pa * d + a * pd - pb * c - b * pc
 
-    kernel = np.array([b, -a]) if a * a + b * b >= c * c + d * d else np.array([d, -c])
-    kernel = kernel / np.linalg.norm(kernel)
-    tangent = derivative(d_theta) * kernel[0] + derivative(d_alpha) * kernel[1]
-    return np.array([det, tangent]), legs
+    kx, ky = (b, -a) if a * a + b * b >= c * c + d * d else (d, -c)
+    norm = math.sqrt(kx * kx + ky * ky)
+    tangent = (derivative(d_theta) * kx + derivative(d_alpha) * ky) / norm
+    return (det, tangent), legs
 
 
 def _refine_cusp(geometry, pose, rho1):
     x, y, alpha = (float(v) for v in pose)
-    point = np.array([math.atan2(y - geometry.a1[1], x - geometry.a1[0]), alpha])
+    theta = math.atan2(y - geometry.a1[1], x - geometry.a1[0])
     h = _CUSP_DIFFERENCE
     for _ in range(_CUSP_ITERATIONS):
-        value, _ = _cusp_equations(geometry, *point, rho1)
-        jacobian = np.column_stack([
-            (_cusp_equations(geometry, *(point + step), rho1)[0]
-             - _cusp_equations(geometry, *(point - step), rho1)[0]) / (2 * h)
-            for step in (np.array([h, 0.0]), np.array([0.0, h]))])
-        try:
-            move = np.linalg.solve(jacobian, -value)
-        except np.linalg.LinAlgError:
+        (f, g), _ = _cusp_equations(geometry, theta, alpha, rho1)
+        # The Jacobian's columns by central differences along theta, then alpha.
+        columns = []
+        for dt, da in ((h, 0.0), (0.0, h)):
+            (fp, gp), _ = _cusp_equations(geometry, theta + dt, alpha + da, rho1)
+            (fm, gm), _ = _cusp_equations(geometry, theta - dt, alpha - da, rho1)
+            columns.append(((fp - fm) / (2 * h), (gp - gm) / (2 * h)))
+        (j11, j21), (j12, j22) = columns
+        det = j11 * j22 - j12 * j21
+        if det == 0.0:
             return None
-        point = point + move
-        if np.max(np.abs(move)) < _CUSP_TOL:
+        move_theta, move_alpha = (j12 * g - j22 * f) / det, (j21 * f - j11 * g) / det
+        theta, alpha = theta + move_theta, alpha + move_alpha
+        if max(abs(move_theta), abs(move_alpha)) < _CUSP_TOL:
             break
     else:
         return None
-    theta, alpha = point
     _, legs = _cusp_equations(geometry, theta, alpha, rho1)
-    b1 = np.array(geometry.a1) + rho1 * np.array([math.cos(theta), math.sin(theta)])
-    cusp_pose = np.array([b1[0], b1[1], float(wrap_angle(alpha))])
+    cusp_pose = np.array([geometry.a1[0] + rho1 * math.cos(theta),
+                          geometry.a1[1] + rho1 * math.sin(theta), float(wrap_angle(alpha))])
     return cusp_pose, np.array([rho1, math.sqrt(legs[0]), math.sqrt(legs[1])])
 
 

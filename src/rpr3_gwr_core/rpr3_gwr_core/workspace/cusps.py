@@ -14,6 +14,7 @@ its last pose, in substeps, and matches it to the next slice's own cusps.
 """
 
 from dataclasses import dataclass
+import itertools
 
 import numpy as np
 
@@ -220,17 +221,26 @@ def _seeds(field):
     row, slot = np.nonzero(mixed & np.isfinite(spread))
     order = np.argsort(spread[row, slot], kind="stable")
     coordinates = grid.coordinates_of(cells)
-    taken = np.empty((_MAX_SEEDS, grid.ndim))
+    spacing = _SEED_SPACING * grid.step
+    # The seeds taken, by their box of the spacing's size: a candidate within
+    # the spacing of a seed is in the seed's box or one next to it, so only
+    # those are searched (thousands of candidates, in Python).
+    points = coordinates.tolist()
+    boxes = np.floor(coordinates / spacing).astype(np.int64).tolist()
+    around = list(itertools.product((-1, 0, 1), repeat=grid.ndim))
+    taken = {}
     n_taken = 0
-    for r, k in zip(row[order], slot[order]):
-        here = coordinates[r]
-        if n_taken == 0 or np.min(np.max(np.abs(here - taken[:n_taken]), axis=1)) \
-                > _SEED_SPACING * grid.step:
-            taken[n_taken] = here
-            n_taken += 1
-            yield poses[r, k]
-            if n_taken == _MAX_SEEDS:
-                return
+    for r, k in zip(row[order].tolist(), slot[order].tolist()):
+        here, box = points[r], boxes[r]
+        if any(max(abs(a - b) for a, b in zip(here, seed)) <= spacing
+               for shift in around
+               for seed in taken.get(tuple(b + s for b, s in zip(box, shift)), ())):
+            continue
+        taken.setdefault(tuple(box), []).append(here)
+        n_taken += 1
+        yield poses[r, k]
+        if n_taken == _MAX_SEEDS:
+            return
 
 
 def _regions_around(roadmap, cell):

@@ -540,7 +540,7 @@ def check_roadmap_grid(mechanism, grid, min_region_cells=8):
         raise InvalidInputError(f"a grid of {' x '.join(map(str, counts))} cells has no faces "
                                 "along one axis: give each axis at least two cells")
     probe = np.unique(np.linspace(0, grid.size - 1, _PROBE_CELLS).astype(np.int64))
-    count, _ = mechanism.solve(np.array([grid.joints_of(cell) for cell in probe]))
+    count, _ = mechanism.solve(grid.joints_at(probe))
     solvable = np.count_nonzero(count) * grid.size / probe.size
     if solvable < min_region_cells:
         names = mechanism.joint_names
