@@ -12,8 +12,8 @@ import pytest
 from rpr3_gwr_core import PAPER_GEOMETRY, Axis, Grid, compute_field
 from rpr3_gwr_core.mechanisms import DEFAULT_FIVE_BAR, DEFAULT_THREE_PRR, DEFAULT_THREE_RRR
 from rpr3_gwr_core.mechanisms.rpr3 import (
-    _DEGENERATE_TOL, _FAKE_RESIDUAL, _POLISH_TOL, _BasePerRow, _linear_terms,
-    _moving_base_fake, _moving_base_linear, _residuals)
+    _FAKE_RESIDUAL, _BasePerRow, _linear_poses, _moving_base_fake, _moving_base_linear,
+    _residuals)
 from rpr3_gwr_core.workspace.field import NSolutionField
 
 
@@ -98,22 +98,15 @@ def test_per_root_kernels_are_the_numpy_formula(m):
     alpha = rng.uniform(-math.pi, math.pi, rows.size)
     geometry = _BasePerRow(points, platform).take(rows)
     r = rho[rows]
-    big_a, big_b, big_c, big_d, big_e, big_f = _linear_terms(alpha, geometry)
-    g = r[:, 1] ** 2 - r[:, 0] ** 2 - big_c
-    h = r[:, 2] ** 2 - r[:, 0] ** 2 - big_f
-    delta = big_a * big_e - big_b * big_d
-    scale = np.abs(big_a * big_e) + np.abs(big_b * big_d) + 1.0
-    regular = np.abs(delta) > _DEGENERATE_TOL * scale
-    safe = np.where(regular, delta, 1.0)
-    expected = np.stack([(big_e * g - big_b * h) / safe + geometry.a1[0],
-                         (big_a * h - big_d * g) / safe + geometry.a1[1], alpha], axis=-1)
+    # The numpy formula, on every root's own copy of its base points.
+    expected, expected_terms, regular, expected_rough = _linear_poses(alpha, r, geometry)
     candidate, terms, kernel_regular, rough = _moving_base_linear(
         points, rho, rows, alpha,
         (platform.d1, platform.d3, platform.beta, platform.d1**2, platform.d3**2))
     assert same_bits(candidate, expected)
-    assert same_bits(terms, np.stack([big_a, big_b, big_d, big_e, g, h]))
+    assert same_bits(terms, np.stack(expected_terms))
     assert np.array_equal(kernel_regular, regular)
-    assert np.array_equal(rough, np.abs(delta) < _POLISH_TOL * scale)
+    assert np.array_equal(rough, expected_rough)
     # Random orientations miss the legs mostly, and now and then fit them.
     limit = _FAKE_RESIDUAL * platform.scale**2
     poses = np.where(rng.random((rows.size, 1)) < 0.5, candidate, expected + 1e-3)

@@ -1070,6 +1070,33 @@ def solve_with_bases(rho, bases, platform):
     return _solve(rho, _BasePerRow(bases, platform))
 
 
+def _linear_poses(a, r, geometry):
+    """The poses of orientations ``a`` (m,) by equation (7)'s linear formula,
+    legs ``r`` (m, 3), one root a row (``geometry`` of m rows or fixed).
+
+    Returns
+    -------
+    candidate : ndarray, shape (m, 3)
+    terms : tuple of ndarray
+        ``(A, B, D, E, g, h)`` of the formula, which a degenerate root needs.
+    regular, rough : ndarray of bool, shape (m,)
+        Whether the formula holds there, and whether it lost digits.
+    """
+    big_a, big_b, big_c, big_d, big_e, big_f = _linear_terms(a, geometry)
+    g = r[:, 1] ** 2 - r[:, 0] ** 2 - big_c
+    h = r[:, 2] ** 2 - r[:, 0] ** 2 - big_f
+    delta = big_a * big_e - big_b * big_d
+    scale = np.abs(big_a * big_e) + np.abs(big_b * big_d) + 1.0
+    regular = np.abs(delta) > _DEGENERATE_TOL * scale
+    safe = np.where(regular, delta, 1.0)
+    x = (big_e * g - big_b * h) / safe
+    y = (big_a * h - big_d * g) / safe
+    ax, ay = geometry.a1
+    candidate = np.stack([x + ax, y + ay, a], axis=-1)
+    return (candidate, (big_a, big_b, big_d, big_e, g, h), regular,
+            np.abs(delta) < _POLISH_TOL * scale)
+
+
 def _solve(rho, geometry):
     """:meth:`ThreeRPR.solve` of checked legs, shape (n, 3); ``geometry`` a
     :class:`ThreeRPR` or a :class:`_BasePerRow` of n rows."""
@@ -1094,20 +1121,9 @@ def _solve(rho, geometry):
         candidate, terms, regular, rough = _moving_base_linear(
             geometry.points, rho, rows, a,
             (geometry.d1, geometry.d3, geometry.beta, geometry.d1**2, geometry.d3**2))
-        big_a, big_b, big_d, big_e, g, h = terms
     else:
-        big_a, big_b, big_c, big_d, big_e, big_f = _linear_terms(a, geometry)
-        g = r[:, 1] ** 2 - r[:, 0] ** 2 - big_c
-        h = r[:, 2] ** 2 - r[:, 0] ** 2 - big_f
-        delta = big_a * big_e - big_b * big_d
-        scale = np.abs(big_a * big_e) + np.abs(big_b * big_d) + 1.0
-        regular = np.abs(delta) > _DEGENERATE_TOL * scale
-        safe = np.where(regular, delta, 1.0)
-        x = (big_e * g - big_b * h) / safe
-        y = (big_a * h - big_d * g) / safe
-        ax, ay = geometry.a1
-        candidate = np.stack([x + ax, y + ay, a], axis=-1)
-        rough = np.abs(delta) < _POLISH_TOL * scale
+        candidate, terms, regular, rough = _linear_poses(a, r, geometry)
+    big_a, big_b, big_d, big_e, g, h = terms
     if not np.all(regular):
         candidate[~regular] = _degenerate_poses(
             r[~regular], a[~regular], rows[~regular], big_a[~regular], big_b[~regular],
