@@ -10,6 +10,7 @@ import pytest
 from gwr_cases import OTHER_GEOMETRY, nearest_slot
 from rpr3_gwr_core.exceptions import InvalidInputError
 from rpr3_gwr_core.workspace import continuity, segmentation
+from rpr3_gwr_core.workspace.components import connected_labels
 from rpr3_gwr_core.workspace.continuity import match_solutions, neighbour_pairs
 from rpr3_gwr_core.paper import rho1_slice
 from rpr3_gwr_core.workspace import compute_field
@@ -462,7 +463,7 @@ def test_patch_numbering_matches_the_whole_array_assignment(cases):
     linked = [segmentation.linked_solutions(lo, up, m) for lo, up, m in seg.links]
     disk_links = segmentation._within_region_links(field, seg.region, linked)
     valid = (field.valid & (seg.region[:, None] > 0)).ravel()
-    component = segmentation._components_by_csgraph(valid, disk_links, valid.size)
+    component = np.where(valid, connected_labels(valid.size, disk_links), -1)
     got = segmentation._number_patches(field, seg.region, component, disk_links)
     component = component.reshape(got.shape)
     expected = np.zeros(got.shape, dtype=np.int32)

@@ -46,8 +46,9 @@ Definitions (paper sections 2 to 4):
 
 Patches are defined by the rotary disk search (``method="rds"``,
 :mod:`~rpr3_gwr_core.rotary_disk`).  The default ``method="components"``
-labels the same connected sets with ``scipy.sparse.csgraph`` and is tested to
-give identical patches, gates and boundaries.
+labels the same connected sets with a union-find over the links
+(:mod:`~rpr3_gwr_core.workspace.components`) and is tested to give identical
+patches, gates and boundaries.
 """
 
 from dataclasses import dataclass, field as dataclass_field
@@ -56,10 +57,11 @@ import functools
 import numba
 import numpy as np
 import scipy.sparse as sparse
-from scipy.sparse.csgraph import breadth_first_order, connected_components
+from scipy.sparse.csgraph import breadth_first_order
 
 from ..exceptions import InvalidInputError
 from ._progress import part
+from .components import connected_labels
 from .continuity import match_solutions
 from .rotary_disk import passage_from_links, rotary_disk_search
 
@@ -479,7 +481,7 @@ def segment(field, method="components", min_region_cells=8, *, progress=None, wo
     if method == "rds":
         component = _components_by_rds(valid, disk_links, field.grid.ndim)
     else:
-        component = _components_by_csgraph(valid, disk_links, n_disks)
+        component = np.where(valid, connected_labels(n_disks, disk_links), -1)
     patch = _absorb_unresolved(field, region,
                                _number_patches(field, region, component, disk_links), linked)
     report("gates and singular boundaries", 0.9)
@@ -497,9 +499,7 @@ def _regions(field, links, min_cells):
             (match >= 0).sum(axis=1) == count[lo])
         rows.append(lo[full])
         cols.append(up[full])
-    rows, cols = np.concatenate(rows), np.concatenate(cols)
-    graph = sparse.coo_matrix((np.ones(rows.size, dtype=np.int8), (rows, cols)), shape=(n, n))
-    _, label = connected_components(graph, directed=False)
+    label = connected_labels(n, zip(rows, cols))
     occupied = count > 0
     sizes = np.bincount(label[occupied], minlength=label.max() + 1)
     volumes = np.bincount(label[occupied], weights=field.grid.cell_volumes()[occupied],
@@ -548,15 +548,6 @@ def _within_region_links(field, region, linked):
         same = (region[a // n] == region[b // n]) & (region[a // n] > 0)
         out.append((a[same], b[same]))
     return out
-
-
-def _components_by_csgraph(valid, disk_links, n_disks):
-    rows = np.concatenate([lo for lo, _ in disk_links])
-    cols = np.concatenate([up for _, up in disk_links])
-    graph = sparse.coo_matrix((np.ones(rows.size, dtype=np.int8), (rows, cols)),
-                              shape=(n_disks, n_disks))
-    _, label = connected_components(graph, directed=False)
-    return np.where(valid, label, -1)
 
 
 def _components_by_rds(valid, disk_links, dimension):
@@ -619,19 +610,18 @@ def _cut_sheets(field, cells, component, disk_links):
     inside = member[lower // n]
     lower, upper = lower[inside], upper[inside]
     size = field.grid.size
-    keys = np.minimum(lower // n, upper // n) * size + np.maximum(lower // n, upper // n)
+    lower_cell, upper_cell = lower // n, upper // n
+    keys = np.minimum(lower_cell, upper_cell) * size + np.maximum(lower_cell, upper_cell)
     # The tree follows faces across which every solution continues (those
     # that make the region), so each of its edges carries every label.
     pair_keys, links_per_pair = np.unique(keys, return_counts=True)
     full = pair_keys[links_per_pair == field.count[pair_keys // size]]
     cell_graph = sparse.coo_matrix((np.ones(full.size, dtype=np.int8),
                                     (full // size, full % size)), shape=(size, size)).tocsr()
-    order, parent = breadth_first_order(cell_graph, int(cells[0]), directed=False)
-    tree = np.sort(np.stack([parent[order[1:]], order[1:]], axis=1), axis=1).astype(np.int64)
-    on_tree = np.isin(keys, tree[:, 0] * size + tree[:, 1])
-    graph = sparse.coo_matrix((np.ones(int(on_tree.sum()), dtype=np.int8),
-                               (lower[on_tree], upper[on_tree])), shape=(size * n, size * n))
-    _, label = connected_components(graph, directed=False)
+    _, parent = breadth_first_order(cell_graph, int(cells[0]), directed=False)
+    # A face is on the tree when one of its cells is the other's parent.
+    on_tree = (parent[lower_cell] == upper_cell) | (parent[upper_cell] == lower_cell)
+    label = connected_labels(size * n, [(lower[on_tree], upper[on_tree])])
     out = component.copy()
     disks = (cells[:, None] * n + np.arange(n)).ravel()
     valid = field.valid[cells].ravel()
@@ -649,9 +639,7 @@ def _absorb_unresolved(field, region, patch, linked):
     a = np.concatenate([a for a, _ in linked])
     b = np.concatenate([b for _, b in linked])
     inner = unresolved[a] & unresolved[b]
-    graph = sparse.coo_matrix((np.ones(int(inner.sum()), dtype=np.int8), (a[inner], b[inner])),
-                              shape=(patch.size, patch.size))
-    _, label = connected_components(graph, directed=False)
+    label = connected_labels(patch.size, [(a[inner], b[inner])])
     edge = unresolved[a] != unresolved[b]
     source = np.where(unresolved[a[edge]], a[edge], b[edge])
     target = patch.ravel()[np.where(unresolved[a[edge]], b[edge], a[edge])]
