@@ -150,14 +150,18 @@ def _screened(field, joints, lower, upper):
     # Each end's cells, joints and poses serve as source in one direction and
     # as target in the other: gathered once, the temporaries are halved (and
     # np.take gathers rows in a third of a fancy index's time).
-    ends = [(cells, np.take(joints, cells, axis=0), field.poses[cells, slots])
+    width = field.max_solutions
+    poses = field.poses.reshape(-1, field.poses.shape[-1])
+    ends = [(cells * width + slots, np.take(joints, cells, axis=0))
             for cells in (lower[same][rows], upper[same][rows])]
-    bad = np.sign(field.margin[ends[0][0], slots]) != np.sign(field.margin[ends[1][0], slots])
+    ends = [(disks, end_joints, np.take(poses, disks, axis=0)) for disks, end_joints in ends]
+    margin, separation = field.margin.ravel(), field.separation.ravel()
+    bad = np.sign(np.take(margin, ends[0][0])) != np.sign(np.take(margin, ends[1][0]))
     for (_, src_joints, src_poses), (dst, dst_joints, dst_poses) in (ends, ends[::-1]):
         pose = mechanism.predict(src_poses, src_joints,
                                  field.grid.nearest_joints(src_joints, dst_joints))
         err = mechanism.pose_distance(dst_poses, pose) / scale
-        gap = field.separation[dst, slots] / scale
+        gap = np.take(separation, dst) / scale
         bad |= ~(err < _SCREEN_TOL) | ~(gap > _SCREEN_RATIO * err)
     unsure = np.zeros(same.size, dtype=bool)
     unsure[rows[bad]] = True
