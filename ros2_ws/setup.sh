@@ -120,6 +120,12 @@ if [ "$(cat "$ws/.build-stamp" 2>/dev/null)" != "$inputs $sources" ]; then
     bash -c 'cd "$1" && colcon --log-base log build --symlink-install \
       --event-handlers console_cohesion- status- \
       --cmake-args -DBUILD_TESTING=OFF -DPython3_EXECUTABLE="$2/bin/python" >&2' _ "$ws" "$venv"
+  # The packages are linked into the workspace, not installed, so nothing
+  # compiled their bytecode: a process that may not write it
+  # (PYTHONDONTWRITEBYTECODE) would compile every module at each start.
+  step "compiling the packages' bytecode" \
+    "$venv/bin/python" -m compileall -q "$root/src/rpr3_gwr_core/rpr3_gwr_core" \
+    "$root/src/rpr3_gwr_nodes/rpr3_gwr_nodes"
   echo "$inputs $sources" > "$ws/.build-stamp"
 fi
 log "ready: source ros2_ws/env.sh"

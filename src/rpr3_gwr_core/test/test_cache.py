@@ -188,10 +188,10 @@ def test_an_entry_evicted_while_it_loads_is_a_plain_miss(tmp_path, fresh, monkey
     cached_roadmap(PAPER_GEOMETRY, GRID, folder)
     read = cache._read
 
-    def racing(entry, name, spec):
+    def racing(entry, name, spec, verify):
         if name == "poses":  # another process evicts the entry between two arrays
             os.rename(entry, entry + ".evicted.tmp")
-        return read(entry, name, spec)
+        return read(entry, name, spec, verify)
 
     monkeypatch.setattr(cache, "_read", racing)
     with warnings.catch_warnings():

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from rpr3_gwr_core import PAPER_GEOMETRY, build_roadmap
+from rpr3_gwr_core.io import cache as cache_module
 from rpr3_gwr_core.io.cache import CacheWarning, cached_roadmap
 from rpr3_gwr_core.io.export import roadmap_arrays
 from rpr3_gwr_core.paper import rho1_slice
@@ -308,3 +309,57 @@ def test_a_damaged_header_or_file_is_caught_and_rebuilt(cache, fresh, damage):
     folder, entry = cache
     FILE_DAMAGE[damage](entry)
     _check_rebuilt(folder, entry, fresh)
+
+
+def _checks_made(monkeypatch):
+    """Counts of the array checksums and value checks the loads make."""
+    made = {"checksums": 0, "values": 0}
+    checksum, values = cache_module._checksum, cache_module._check_values
+
+    def counted_checksum(data):
+        made["checksums"] += isinstance(data, np.ndarray)
+        return checksum(data)
+
+    def counted_values(*args):
+        made["values"] += 1
+        return values(*args)
+
+    monkeypatch.setattr(cache_module, "_checksum", counted_checksum)
+    monkeypatch.setattr(cache_module, "_check_values", counted_values)
+    return made
+
+
+def test_an_entry_checked_once_is_mapped_unread_while_its_files_are_unchanged(
+        cache, fresh, monkeypatch):
+    folder, entry = cache
+    made = _checks_made(monkeypatch)
+    roadmap, hit = cached_roadmap(PAPER_GEOMETRY, GRID, str(folder))
+    assert hit and made == {"checksums": len(_header(entry)["arrays"]), "values": 1}
+    assert (entry / "checked.json").is_file()
+    for _ in range(2):
+        roadmap, hit = cached_roadmap(PAPER_GEOMETRY, GRID, str(folder))
+        assert hit
+        assert_same(roadmap, fresh)
+    assert made["values"] == 1 and made["checksums"] == len(_header(entry)["arrays"])
+
+
+@pytest.mark.parametrize("damage", ["margin signs flipped", "table patch cells shuffled"])
+def test_a_file_rewritten_after_the_check_is_checked_again(cache, fresh, damage):
+    folder, entry = cache
+    cached_roadmap(PAPER_GEOMETRY, GRID, str(folder))
+    assert (entry / "checked.json").is_file()
+    name, change = ARRAY_DAMAGE[damage]
+    _edit(entry, name, change)
+    _restamp(entry)
+    _check_rebuilt(folder, entry, fresh)
+
+
+def test_a_copied_entry_is_checked_again(cache, tmp_path, monkeypatch):
+    folder, entry = cache
+    cached_roadmap(PAPER_GEOMETRY, GRID, str(folder))
+    copy = tmp_path / "copy"
+    # copytree keeps the files' sizes and times; the inodes are new.
+    shutil.copytree(folder, copy)
+    made = _checks_made(monkeypatch)
+    _, hit = cached_roadmap(PAPER_GEOMETRY, GRID, str(copy))
+    assert hit and made["values"] == 1

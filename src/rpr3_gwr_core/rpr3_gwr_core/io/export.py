@@ -134,7 +134,8 @@ def roadmap_arrays(roadmap):
             "links": [match for _, _, match in seg.links]}
 
 
-def roadmap_from_arrays(mechanism_dict, grid_dict, arrays, tables=None, areas=None):
+def roadmap_from_arrays(mechanism_dict, grid_dict, arrays, tables=None, areas=None,
+                        check=True):
     """A roadmap from its mechanism and grid documents and its arrays
     (:func:`roadmap_arrays`); patches and gates are derived from the arrays,
     or taken from ``tables`` when given.
@@ -151,6 +152,10 @@ def roadmap_from_arrays(mechanism_dict, grid_dict, arrays, tables=None, areas=No
     areas : ndarray of float, optional
         With ``tables``: each patch's area, in the order of its
         ``patch_ids``.
+    check : bool
+        With ``tables``: check the tables against the arrays
+        (:meth:`~rpr3_gwr_core.workspace.segmentation.Segmentation.from_tables`);
+        False for values checked before.
 
     Raises
     ------
@@ -173,7 +178,7 @@ def roadmap_from_arrays(mechanism_dict, grid_dict, arrays, tables=None, areas=No
         segmentation = Segmentation.from_arrays(field, array["region"], array["patch"], links)
         return Roadmap(segmentation=segmentation, graph=roadmap_graph(segmentation), timings={})
     segmentation = Segmentation.from_tables(field, array["region"], array["patch"], links,
-                                            tables)
+                                            tables, check=check)
     ids = tables["patch_ids"]
     if areas is None or np.shape(areas) != ids.shape or not np.all(np.isfinite(areas)) \
             or not np.all(np.asarray(areas) > 0):

@@ -271,7 +271,7 @@ class Segmentation:
         }
 
     @classmethod
-    def from_tables(cls, field, region, patch, matches, tables):
+    def from_tables(cls, field, region, patch, matches, tables, check=True):
         """The segmentation :meth:`tables` describes, its patches' and
         gates' arrays views of ``tables``.
 
@@ -289,6 +289,10 @@ class Segmentation:
             int32 already (a stored roadmap's mapped arrays).
         tables : dict of str to ndarray
             :meth:`tables`.
+        check : bool
+            Check the values of the arrays and tables; only their shapes
+            and dtypes when False, for arrays and tables whose values were
+            checked before (a cache entry's, unchanged since its first load).
 
         Raises
         ------
@@ -296,8 +300,9 @@ class Segmentation:
             If the arrays do not fit the grid or the tables do not describe
             the arrays' patches.
         """
-        region, patch, matches = _checked_arrays(field, region, patch, matches, copy=False)
-        t = _checked_tables(field, region, patch, tables)
+        region, patch, matches = _checked_arrays(field, region, patch, matches, copy=False,
+                                                 check_values=check)
+        t = _checked_tables(field, region, patch, tables, check_values=check)
         starts, cells, slots = t["patch_starts"], t["patch_cells"], t["patch_slots"]
         patches = {}
         for k, pid in enumerate(t["patch_ids"].tolist()):
@@ -336,11 +341,11 @@ def _check_matches(field, pairs, matches):
         raise InvalidInputError("region, patch and link arrays do not fit the field's grid")
 
 
-def _checked_arrays(field, region, patch, matches, copy):
+def _checked_arrays(field, region, patch, matches, copy, check_values=True):
     """``region`` and ``patch`` as int32 (copies, or with ``copy=False`` the
     arrays themselves when int32 already) and ``matches`` as int8 arrays,
     checked as :meth:`Segmentation.from_arrays` documents (the matches'
-    shapes aside)."""
+    shapes aside; their shapes only, without ``check_values``)."""
     n, slots = field.grid.size, field.max_solutions
     region = np.asarray(region)
     patch = np.asarray(patch)
@@ -349,6 +354,8 @@ def _checked_arrays(field, region, patch, matches, copy):
         raise InvalidInputError("region, patch and link arrays do not fit the field's grid")
     matches = [np.asarray(m, dtype=np.int8) for m in matches]
     region, patch = region.astype(np.int32, copy=copy), patch.astype(np.int32, copy=copy)
+    if not check_values:
+        return region, patch, matches
     # The compiled passes index by slot and by id unchecked: links must
     # name slots, and ids be what the module doc makes them, below the
     # next region's first id.
@@ -360,9 +367,10 @@ def _checked_arrays(field, region, patch, matches, copy):
     return region, patch, matches
 
 
-def _checked_tables(field, region, patch, tables):
+def _checked_tables(field, region, patch, tables, check_values=True):
     """The tables of :meth:`Segmentation.from_tables`, checked against the
-    arrays; raises InvalidInputError naming what fails."""
+    arrays (their shapes and dtypes only, without ``check_values``); raises
+    InvalidInputError naming what fails."""
     try:
         t = {name: np.asarray(tables[name]) for name in TABLE_TYPES}
     except KeyError as exc:
@@ -380,6 +388,8 @@ def _checked_tables(field, region, patch, tables):
     if any(t[name].shape != shape or t[name].dtype != np.dtype(TABLE_TYPES[name])
            for name, shape in shapes.items()):
         raise InvalidInputError("the segmentation tables' shapes or dtypes do not fit")
+    if not check_values:
+        return t
     ids, starts, cells, cell_slots = (t["patch_ids"], t["patch_starts"], t["patch_cells"],
                                       t["patch_slots"])
     if np.any(np.diff(ids) <= 0) or starts[0] != 0 or starts[-1] != n_entries \
