@@ -65,11 +65,13 @@ class RoadmapIndex:
     Parameters
     ----------
     roadmap : Roadmap
+    index : PlanningIndex
+        The roadmap's: it holds the patches' centroids and the gates' middles.
     narrow_penalty : float
         Weight of ``step / width`` in the weighted edge cost.
     """
 
-    def __init__(self, roadmap, narrow_penalty=NARROW_PENALTY):
+    def __init__(self, roadmap, index, narrow_penalty=NARROW_PENALTY):
         self.graph = roadmap.graph
         self.component = {}
         for label, nodes in enumerate(nx.connected_components(self.graph)):
@@ -78,14 +80,13 @@ class RoadmapIndex:
         self.aspect = nx.get_node_attributes(self.graph, "aspect")
         seg = roadmap.segmentation
         grid = seg.field.grid
-        # The cells' coordinates patch by patch: those of the whole grid
-        # would be a temporary of a quarter gigabyte on the full roadmap.
-        self.centroid = {pid: grid.coordinates_of(p.cells).mean(axis=0)
-                         for pid, p in seg.patches.items()}
+        pids = index.pids.tolist()
+        self.centroid = dict(zip(pids, index.centroids))
+        position = {pid: k for k, pid in enumerate(pids)}
         self.weighted = nx.Graph()
         self.weighted.add_nodes_from(self.graph.nodes)
         for (a, b), gate in seg.gates.items():
-            middle = grid.coordinates_of(gate.faces.ravel()).mean(axis=0)
+            middle = index.gate_middles[index.pair(position[a], position[b])]
             cost = (np.linalg.norm(self.centroid[a] - middle)
                     + np.linalg.norm(middle - self.centroid[b])
                     + narrow_penalty * float(np.prod(grid.steps)) / gate.width)

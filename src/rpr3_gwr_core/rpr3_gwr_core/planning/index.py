@@ -5,7 +5,9 @@ It holds the node graph (one node per solution of a patch's cell, joined by
 the continuation links within patches and across gates), the nodes of each
 patch next to each of its gates, the node costs of given clearance weights
 and, for given clearances, each patch's distances to each of its gates,
-which guide the searches (:mod:`~.astar`).  The gate distances are most of
+which guide the searches (:mod:`~.astar`); and the centroids of the patches
+and the middles of their gates, which weigh the global search's edges
+(:class:`~.global_planning.RoadmapIndex`).  The gate distances are most of
 the work of building one: seconds on the full 3-DOF roadmap, a few tenths
 on the paper's slice.
 
@@ -44,7 +46,8 @@ INDEX_TYPES = {
     "quanta": "<u2", "position": "<i4", "turn": "<i8", "gate_pairs": "<i8",
     "gate_node_offsets": "<i8",
     "gate_node_list": "<i8", "quantum": "<f8", "clearances": "<f8", "distances": "<i8",
-    "weights": "<f8", "node_costs": "<i8", "cost_floors": "<i8",
+    "weights": "<f8", "node_costs": "<i8", "cost_floors": "<i8", "centroids": "<f8",
+    "gate_middles": "<f8",
 }
 """The arrays of an index (:meth:`PlanningIndex.arrays`) and their dtypes."""
 
@@ -69,6 +72,10 @@ class PlanningIndex:
         The searches' length unit [joint unit] (:func:`~.astar.edge_quanta`).
     gate_pairs : ndarray of int64, shape (E, 2)
         Every ordered pair ``(k, other)`` of patch indices joined by a gate, sorted.
+    centroids : ndarray of float64, shape (P, d)
+        Mean axis values of each patch's cells [joint units].
+    gate_middles : ndarray of float64, shape (E, d)
+        Mean axis values of the cells on the faces of each pair's gate [joint units].
     clearances, weights : tuple of float
         Those the index holds gate distances and node costs for.
     """
@@ -84,6 +91,8 @@ class PlanningIndex:
                                arrays["turn"])
         self.quantum = float(arrays["quantum"][0])
         self.gate_pairs = arrays["gate_pairs"]
+        self.centroids = arrays["centroids"]
+        self.gate_middles = arrays["gate_middles"]
         self.clearances = tuple(arrays["clearances"].tolist())
         self.weights = tuple(arrays["weights"].tolist())
         sizes = np.diff(self.offsets)
@@ -246,12 +255,16 @@ def _graph_arrays(roadmap):
     indptr, indices = adjacency(n_nodes, *_edges(seg, patches, offsets))
     grid = seg.field.grid
     quantum = _lattice_quantum(grid.steps)
-    position = node_positions(grid.coordinates_of(node_cell), quantum)
+    coordinates = grid.coordinates_of(node_cell)
+    position = node_positions(coordinates, quantum)
     turn = np.rint(2.0 * grid.periods / quantum).astype(np.int64)
     index_of = {pid: k for k, pid in enumerate(pids.tolist())}
     pairs = sorted({(index_of[a], index_of[b]) for a, b in seg.gates}
                    | {(index_of[b], index_of[a]) for a, b in seg.gates})
     gate_pairs = np.array(pairs, dtype=np.int64).reshape(-1, 2)
+    pid_of = pids.tolist()
+    middles = {key: grid.coordinates_of(gate.faces.ravel()).mean(axis=0)
+               for key, gate in seg.gates.items()}
     lists = [gate_nodes(indptr, indices, node_patch, offsets[k], offsets[k + 1], other)
              for k, other in pairs]
     return {
@@ -266,6 +279,11 @@ def _graph_arrays(roadmap):
             [[0], np.cumsum([a.size for a in lists])]).astype(np.int64),
         "gate_node_list": np.concatenate(lists + empty).astype(np.int64),
         "quantum": np.array([quantum]), **_no_tables(n_nodes, pids.size),
+        "centroids": np.array([coordinates[offsets[k]:offsets[k + 1]].mean(axis=0)
+                               for k in range(pids.size)]).reshape(-1, grid.ndim),
+        "gate_middles": np.array([middles[min(pid_of[k], pid_of[other]),
+                                          max(pid_of[k], pid_of[other])]
+                                  for k, other in pairs]).reshape(-1, grid.ndim),
     }
 
 
@@ -367,7 +385,8 @@ def _check_index(roadmap, arrays):
     shapes = {"node_cell": (n,), "node_slot": (n,), "node_patch": (n,), "node_margin": (n,),
               "indptr": (n + 1,), "quanta": indices.shape, "position": (n, d), "turn": (d,),
               "gate_pairs": (n_gates, 2), "gate_node_offsets": (n_gates + 1,),
-              "quantum": (1,), "node_costs": (n_weights, n), "cost_floors": (n_weights, p)}
+              "quantum": (1,), "node_costs": (n_weights, n), "cost_floors": (n_weights, p),
+              "centroids": (p, d), "gate_middles": (n_gates, d)}
     wrong = [name for name, shape in shapes.items() if arrays[name].shape != shape]
     if wrong or indices.ndim != 1 or arrays["clearances"].ndim != 1 \
             or arrays["weights"].ndim != 1:
@@ -389,5 +408,8 @@ def _check_index(roadmap, arrays):
     field_size = int(np.diff(offsets)[pairs[:, 0]].sum()) if n_gates else 0
     if arrays["distances"].shape != (n_clearances, field_size):
         raise InvalidInputError("the index's gate distances have the wrong shape")
-    if not (np.all(np.isfinite(arrays["node_margin"])) and arrays["quantum"][0] > 0):
-        raise InvalidInputError("the index's margins or quantum are not finite")
+    if not (np.all(np.isfinite(arrays["node_margin"])) and arrays["quantum"][0] > 0
+            and np.all(np.isfinite(arrays["centroids"]))
+            and np.all(np.isfinite(arrays["gate_middles"]))):
+        raise InvalidInputError("the index's margins, quantum, centroids or gate middles "
+                                "are not finite")

@@ -288,7 +288,7 @@ class Planner:
         if index is None:
             index = planning_index(roadmap, clearance_weight=clearance_weight, retries=retries)
         self.planning_index = index
-        self.global_index = RoadmapIndex(roadmap)
+        self.global_index = RoadmapIndex(roadmap, index)
         self.local = LocalPlanner(roadmap, index)
         self.clearance_weight = float(clearance_weight)
         self.min_margin = float(min_margin)
