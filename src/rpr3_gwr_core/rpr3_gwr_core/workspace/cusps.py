@@ -14,8 +14,7 @@ its last pose, in substeps, and matches it to the next slice's own cusps.
 """
 
 from dataclasses import dataclass
-import itertools
-
+import numba
 import numpy as np
 
 from ..exceptions import InvalidInputError, OutOfGridError
@@ -220,27 +219,34 @@ def _seeds(field):
                    + np.take_along_axis(aspect, k, axis=1)) == 1
     row, slot = np.nonzero(mixed & np.isfinite(spread))
     order = np.argsort(spread[row, slot], kind="stable")
-    coordinates = grid.coordinates_of(cells)
-    spacing = _SEED_SPACING * grid.step
-    # The seeds taken, by their box of the spacing's size: a candidate within
-    # the spacing of a seed is in the seed's box or one next to it, so only
-    # those are searched (thousands of candidates, in Python).
-    points = coordinates.tolist()
-    boxes = np.floor(coordinates / spacing).astype(np.int64).tolist()
-    around = list(itertools.product((-1, 0, 1), repeat=grid.ndim))
-    taken = {}
+    row, slot = row[order], slot[order]
+    for k in _spaced(grid.coordinates_of(cells[row]), _SEED_SPACING * grid.step, _MAX_SEEDS):
+        yield poses[row[k], slot[k]]
+
+
+@numba.njit(cache=True, nogil=True)
+def _spaced(points, spacing, most):
+    """Indices of the first ``most`` of ``points`` (n, d), taken in order,
+    each farther than ``spacing`` along some axis from every one taken before."""
+    taken = np.empty(most, dtype=np.int64)
     n_taken = 0
-    for r, k in zip(row[order].tolist(), slot[order].tolist()):
-        here, box = points[r], boxes[r]
-        if any(max(abs(a - b) for a, b in zip(here, seed)) <= spacing
-               for shift in around
-               for seed in taken.get(tuple(b + s for b, s in zip(box, shift)), ())):
-            continue
-        taken.setdefault(tuple(box), []).append(here)
-        n_taken += 1
-        yield poses[r, k]
-        if n_taken == _MAX_SEEDS:
-            return
+    for i in range(points.shape[0]):
+        if n_taken == most:
+            break
+        near = False
+        for t in range(n_taken):
+            j = taken[t]
+            near = True
+            for axis in range(points.shape[1]):
+                if abs(points[i, axis] - points[j, axis]) > spacing:
+                    near = False
+                    break
+            if near:
+                break
+        if not near:
+            taken[n_taken] = i
+            n_taken += 1
+    return taken[:n_taken]
 
 
 def _regions_around(roadmap, cell):
