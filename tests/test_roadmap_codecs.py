@@ -84,6 +84,19 @@ def test_a_roadmap_message_that_disagrees_with_its_field_is_refused(built):
         roadmap_from_msgs(field_msg, roadmap_msg)
 
 
+def test_the_decoded_graph_keeps_the_patch_areas_sent(built, decoded):
+    for pid, attributes in built.graph.nodes(data=True):
+        assert decoded["messages"].graph.nodes[pid]["area"] == attributes["area"]
+
+
+@pytest.mark.parametrize("area", [0.0, -1.0, math.nan, math.inf])
+def test_a_roadmap_message_with_an_area_not_positive_is_refused(built, area):
+    field_msg, roadmap_msg = roadmap_to_msgs(built, Header())
+    roadmap_msg.patches[3].area = area
+    with pytest.raises(InvalidInputError, match="areas"):
+        roadmap_from_msgs(field_msg, roadmap_msg)
+
+
 def _truncated(values):
     return values[:-1]
 
