@@ -16,6 +16,7 @@ from rpr3_gwr_core import InvalidInputError, build_roadmap
 from rpr3_gwr_core.io import cache
 from rpr3_gwr_core.io.cache import CacheWarning, STALE_STAGING_SECONDS, cache_key, cached_roadmap
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, rho1_slice
+from rpr3_gwr_core.workspace import AdaptiveGrid
 
 GRID = rho1_slice(rho1=17, step=1.0)
 OTHERS = (rho1_slice(rho1=13, step=1.0), rho1_slice(rho1=15, step=1.0))
@@ -199,3 +200,23 @@ def test_an_entry_evicted_while_it_loads_is_a_plain_miss(tmp_path, fresh, monkey
         roadmap, hit = cached_roadmap(PAPER_GEOMETRY, GRID, folder)
     assert not hit
     _same(roadmap, fresh)
+
+
+def test_an_entry_is_found_by_the_roadmap_s_own_grid(tmp_path):
+    built, index, _ = cache.cached_planning(PAPER_GEOMETRY, GRID, str(tmp_path))
+    found = cache.find_cached_planning(PAPER_GEOMETRY, built.grid, str(tmp_path))
+    assert found is not None
+    _same(found[0], built)
+    assert found[1].clearances == index.clearances
+    assert cache.find_cached_planning(PAPER_GEOMETRY, OTHERS[0], str(tmp_path)) is None
+    assert cache.find_cached_planning(PAPER_GEOMETRY, GRID, str(tmp_path / "none")) is None
+
+
+def test_an_adaptive_entry_is_found_by_its_refined_grid_only(tmp_path):
+    base = rho1_slice(rho1=17, step=2.0)
+    built, _, _ = cache.cached_planning(PAPER_GEOMETRY, base, str(tmp_path), refinement=2)
+    found = cache.find_cached_planning(PAPER_GEOMETRY, built.grid, str(tmp_path))
+    assert found is not None and found[0].grid == built.grid
+    # The same base and refinement, other refined blocks: not this entry's roadmap.
+    other = AdaptiveGrid(base, 2, built.grid.blocks[1:])
+    assert cache.find_cached_planning(PAPER_GEOMETRY, other, str(tmp_path)) is None

@@ -113,3 +113,24 @@ def test_an_index_on_the_graph_of_another_equals_one_built_whole(cached):
     again = PlanningIndex.build(roadmap, index.clearances, index.weights, graph_from=bare)
     for name, array in index.arrays().items():
         np.testing.assert_array_equal(again.arrays()[name], array, err_msg=name)
+
+
+def test_an_index_holding_what_is_asked_is_taken_as_it_is(cached):
+    _, roadmap, index = cached
+    assert PlanningIndex.build(roadmap, index.clearances, index.weights,
+                               graph_from=index) is index
+    assert PlanningIndex.build(roadmap, (), (), graph_from=index) is index
+    other = PlanningIndex.build(roadmap, (0.05,), index.weights, graph_from=index)
+    assert other is not index and other.clearances == (0.05,)
+
+
+def test_the_centroids_and_gate_middles_are_the_cells_means(cached):
+    _, roadmap, index = cached
+    seg, grid = roadmap.segmentation, roadmap.grid
+    for k, pid in enumerate(index.pids.tolist()):
+        np.testing.assert_allclose(index.centroids[k],
+                                   grid.joints_at(seg.patches[pid].cells)[:, [1, 2]].mean(axis=0))
+    for (k, other), middle in zip(index.gate_pairs.tolist(), index.gate_middles):
+        a, b = sorted((int(index.pids[k]), int(index.pids[other])))
+        faces = seg.gates[a, b].faces
+        np.testing.assert_allclose(middle, grid.joints_at(faces.ravel())[:, [1, 2]].mean(axis=0))

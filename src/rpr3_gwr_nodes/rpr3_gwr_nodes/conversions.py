@@ -38,8 +38,8 @@ from .profiles import BASE_FRAME
 
 __all__ = ["MAX_DURATION", "duration_msg", "mechanism_to_msg", "mechanism_from_msg",
            "pose_msg", "configuration_from_msg", "grid_to_msg", "grid_from_msg",
-           "roadmap_to_msgs", "roadmap_from_msgs", "scene_to_msg", "scene_from_msg",
-           "is_empty_scene"]
+           "roadmap_to_msgs", "roadmap_from_msgs", "roadmap_matches_msgs", "scene_to_msg",
+           "scene_from_msg", "is_empty_scene"]
 
 # builtin_interfaces/Duration holds int32 seconds.
 MAX_DURATION = 2**31 - 1
@@ -225,6 +225,54 @@ def roadmap_from_msgs(field_msg, roadmap_msg):
     InvalidInputError
         If the messages are inconsistent or do not belong together.
     """
+    mechanism, grid = _message_frame(field_msg, roadmap_msg)
+    count, valid, poses, margin, patch_ids, region, links = _field_arrays(field_msg, mechanism,
+                                                                          grid)
+    n, slots, size = grid.size, mechanism.max_solutions, mechanism.pose_size
+    full_poses = np.full((n, slots, size), np.nan)
+    full_poses[valid] = poses
+    full_margin = np.full((n, slots), np.nan)
+    full_margin[valid] = margin
+    patch = np.zeros((n, slots), np.int32)
+    patch[valid] = patch_ids
+    field = NSolutionField(mechanism=mechanism, grid=grid, count=count, poses=full_poses,
+                           margin=full_margin)
+    segmentation = Segmentation.from_arrays(field, region, patch, links)
+    if not _same_patches_and_gates(segmentation, roadmap_msg):
+        raise InvalidInputError("the roadmap message's patches and gates do not match its field")
+    # The areas come with the patches: summing the cells' volumes again takes
+    # most of a second on an adaptive grid of millions of cells.
+    areas = {p.id: p.area for p in roadmap_msg.patches}
+    if not all(math.isfinite(area) and area > 0 for area in areas.values()):
+        raise InvalidInputError("the roadmap message's patch areas are not all positive")
+    return Roadmap(segmentation=segmentation, graph=roadmap_graph(segmentation, areas),
+                   timings={})
+
+
+def roadmap_matches_msgs(roadmap, field_msg, roadmap_msg):
+    """Whether ``roadmap`` is the one two messages describe, value for
+    value: a copy of it from elsewhere (a roadmap cache) can then stand in
+    for decoding them.  False for messages that describe no roadmap."""
+    try:
+        mechanism, grid = _message_frame(field_msg, roadmap_msg)
+        count, valid, poses, margin, patch_ids, region, links = _field_arrays(
+            field_msg, mechanism, grid)
+    except InvalidInputError:
+        return False
+    seg = roadmap.segmentation
+    field = seg.field
+    if mechanism != field.mechanism or grid != field.grid \
+            or not np.array_equal(field.count, count):
+        return False
+    return (np.array_equal(seg.region, region) and np.array_equal(seg.patch[valid], patch_ids)
+            and np.array_equal(field.margin[valid], margin)
+            and np.array_equal(field.poses[valid], poses) and len(links) == len(seg.links)
+            and all(np.array_equal(match, sent) for (_, _, match), sent in zip(seg.links, links))
+            and _same_patches_and_gates(seg, roadmap_msg))
+
+
+def _message_frame(field_msg, roadmap_msg):
+    """The mechanism and grid two roadmap messages share, checked."""
     mechanism, grid = mechanism_from_msg(field_msg.mechanism), grid_from_msg(field_msg.grid)
     if (mechanism_from_msg(roadmap_msg.mechanism) != mechanism
             or grid_from_msg(roadmap_msg.grid) != grid):
@@ -234,6 +282,14 @@ def roadmap_from_msgs(field_msg, roadmap_msg):
             joint >= mechanism.n_joints for joint, _ in grid.fixed):
         raise InvalidInputError(f"grid message: a joint index beyond the {mechanism.kind}'s "
                                 f"{mechanism.n_joints} joints")
+    return mechanism, grid
+
+
+def _field_arrays(field_msg, mechanism, grid):
+    """A field message's arrays, checked for size: the counts (n,), which
+    slots hold a solution (n, slots), the solutions' poses (m, pose size),
+    margins (m,) and patch ids (m,), the region ids (n,) and the links of
+    each axis (faces, slots), views of the message where they can be."""
     slots, size = mechanism.max_solutions, mechanism.pose_size
     if (field_msg.max_solutions, field_msg.pose_size) != (slots, size):
         raise InvalidInputError(f"field message: {field_msg.max_solutions} solutions of "
@@ -246,31 +302,20 @@ def roadmap_from_msgs(field_msg, roadmap_msg):
                                 f"mechanism at most {slots}")
     valid = np.arange(slots) < count[:, None]
     total = int(count.sum(dtype=np.int64))
-    poses = np.full((n, slots, size), np.nan)
-    poses[valid] = _unpack(field_msg.poses, np.float64, total * size, "poses").reshape(-1, size)
-    margin = np.full((n, slots), np.nan)
-    margin[valid] = _unpack(field_msg.singularity_margin, np.float64, total,
-                            "singularity_margin")
-    patch = np.zeros((n, slots), np.int32)
-    patch[valid] = _unpack(field_msg.patch_ids, np.int32, total, "patch_ids")
-    field = NSolutionField(mechanism=mechanism, grid=grid, count=count, poses=poses,
-                           margin=margin)
+    poses = _unpack(field_msg.poses, np.float64, total * size, "poses").reshape(-1, size)
+    margin = _unpack(field_msg.singularity_margin, np.float64, total, "singularity_margin")
+    patch_ids = _unpack(field_msg.patch_ids, np.int32, total, "patch_ids")
+    region = _unpack(field_msg.region_ids, np.int32, n, "region_ids")
     if any(len(axis.slots) % slots for axis in field_msg.links):
         raise InvalidInputError(f"field message: links are not {slots} per face")
     links = [np.frombuffer(axis.slots, np.int8).reshape(-1, slots) if len(axis.slots)
              else np.zeros((0, slots), np.int8) for axis in field_msg.links]
-    segmentation = Segmentation.from_arrays(
-        field, _unpack(field_msg.region_ids, np.int32, n, "region_ids"), patch, links)
-    if ({p.id for p in roadmap_msg.patches} != set(segmentation.patches)
-            or {(g.patch_a, g.patch_b) for g in roadmap_msg.gates} != set(segmentation.gates)):
-        raise InvalidInputError("the roadmap message's patches and gates do not match its field")
-    # The areas come with the patches: summing the cells' volumes again takes
-    # most of a second on an adaptive grid of millions of cells.
-    areas = {p.id: p.area for p in roadmap_msg.patches}
-    if not all(math.isfinite(area) and area > 0 for area in areas.values()):
-        raise InvalidInputError("the roadmap message's patch areas are not all positive")
-    return Roadmap(segmentation=segmentation, graph=roadmap_graph(segmentation, areas),
-                   timings={})
+    return count, valid, poses, margin, patch_ids, region, links
+
+
+def _same_patches_and_gates(segmentation, roadmap_msg):
+    return ({p.id for p in roadmap_msg.patches} == set(segmentation.patches)
+            and {(g.patch_a, g.patch_b) for g in roadmap_msg.gates} == set(segmentation.gates))
 
 
 def scene_to_msg(scene, header):

@@ -68,6 +68,7 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallb
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rpr3_gwr_core.exceptions import GWRError, InvalidInputError
+from rpr3_gwr_core.io.cache import find_cached_planning
 from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
 from rpr3_gwr_core.io.paths import default_cache_dir
 from rpr3_gwr_core.planning import (DEFAULT_CLEARANCE, PlanningIndex, PlanOptions, Planner,
@@ -78,8 +79,10 @@ from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from visualization_msgs.msg import MarkerArray
 
-from .conversions import (MAX_DURATION, configuration_from_msg, duration_msg, is_empty_scene,
-                          pose_msg, roadmap_from_msgs, scene_from_msg, scene_to_msg)
+from .conversions import (MAX_DURATION, configuration_from_msg, duration_msg, grid_from_msg,
+                          is_empty_scene, mechanism_from_msg, pose_msg, roadmap_from_msgs,
+                          roadmap_matches_msgs, scene_from_msg, scene_to_msg)
+from .core_threads import core_threads
 from .mechanism_parameters import kept_scene
 from .memory import release_free_memory, use_one_arena
 from .plan_workers import PlanWorkers, WorkerFailed, WorkersClosed
@@ -87,7 +90,8 @@ from .profiles import BASE_FRAME, LATCHED_QOS, SERVICE_QOS
 from .spin import run
 from .visualization import path_markers
 
-__all__ = ["PlannerNode", "ERROR_CODES", "FEASIBILITY", "plan_to_trajectory", "main", "USAGE"]
+__all__ = ["PlannerNode", "ERROR_CODES", "FEASIBILITY", "plan_to_trajectory", "received_roadmap",
+           "main", "USAGE"]
 
 USAGE = """\
 usage: ros2 run rpr3_gwr_nodes planner [-h] [--ros-args ...]
@@ -129,6 +133,42 @@ FEASIBILITY = {
     "same_part": PlanPath.Response.FEASIBILITY_SAME_PATCH,
     "blocked": PlanPath.Response.FEASIBILITY_BLOCKED,
 }
+
+
+def received_roadmap(field_msg, roadmap_msg, cache_dir=None):
+    """The roadmap two messages describe and a planning index of it.
+
+    The roadmap cache's entry of it when the cache (``cache_dir``, by
+    default the user's) holds one, value for value: a builder on this
+    machine loaded or built it there, and its entry is mapped with the full
+    index, gate distances included.  Else the messages decoded, with an
+    index of the node graph only, which plans at once (gate distances then
+    come with the full index).
+
+    Returns
+    -------
+    roadmap : Roadmap
+    index : PlanningIndex
+    cached : bool
+        Whether they are the cache's.
+
+    Raises
+    ------
+    GWRError
+        If the messages are inconsistent or do not belong together.
+    """
+    cached = None
+    try:
+        mechanism, grid = mechanism_from_msg(field_msg.mechanism), grid_from_msg(field_msg.grid)
+    except GWRError:
+        pass  # roadmap_from_msgs says what is wrong
+    else:
+        with core_threads() as pool:
+            cached = find_cached_planning(mechanism, grid, cache_dir, workers=pool.map)
+    if cached is not None and roadmap_matches_msgs(cached[0], field_msg, roadmap_msg):
+        return (*cached, True)
+    received = roadmap_from_msgs(field_msg, roadmap_msg)
+    return received, PlanningIndex.build(received), False
 
 
 def plan_to_trajectory(plan, joint_names, header):
@@ -298,18 +338,19 @@ class PlannerNode(Node):
         # readiness looks like a hang.
         with numba_event.install_listener("numba:compile", _CompileNotice(self.get_logger())):
             try:
-                received = roadmap_from_msgs(field, roadmap)
+                received, index, cached = received_roadmap(field, roadmap)
+                if cached:
+                    self.get_logger().info("the roadmap is in the roadmap cache: its entry, "
+                                           "with its planning index, is mapped")
                 if self.mechanism is not None and received.mechanism != self.mechanism:
                     raise InvalidInputError(f"the roadmap is the {received.mechanism.kind}'s "
                                             f"{received.mechanism.to_dict()}, not the "
                                             f"mechanism file's {self.mechanism.to_dict()}")
-                # Ready at once: gate distances come with the full index, below.
-                planner = Planner(received, PlanningIndex.build(received),
-                                  retries=self._retries)
+                planner = Planner(received, index, retries=self._retries)
             except GWRError as exc:
                 self.get_logger().error(f"ignoring an inconsistent roadmap: {exc}")
                 return
-            del received
+            del received, index
             self._messages.clear()
             try:
                 planner.warm_up()

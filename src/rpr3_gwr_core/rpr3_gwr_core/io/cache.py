@@ -101,7 +101,7 @@ from .paths import default_cache_dir
 
 __all__ = ["CacheWarning", "DEFAULT_MAX_BYTES", "STALE_STAGING_SECONDS", "default_cache_dir",
            "default_max_bytes", "cache_key", "cached_roadmap", "cached_planning",
-           "save_planning_files", "map_planning_files"]
+           "find_cached_planning", "save_planning_files", "map_planning_files"]
 
 # Bump when a change of the algorithms changes roadmaps, so old entries are not reused.
 ALGORITHM_REVISION = 5
@@ -279,6 +279,43 @@ def cached_planning(mechanism, grid, cache_dir=None, progress=None, refinement=N
         _evict(directory, path, max_bytes)
     report("done", 1.0)
     return roadmap, index, False
+
+
+def find_cached_planning(mechanism, grid, cache_dir=None, *, workers=map):
+    """The roadmap and planning index of the entry built for a mechanism on
+    a grid, if the cache holds it: for a roadmap received from elsewhere
+    (the planner node's, published by a builder that loaded or built it
+    through the same cache), whose index is then mapped rather than built.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+    grid : Grid or AdaptiveGrid
+        The roadmap's own grid: an adaptive grid's entry is the one built by
+        refining its base grid as often.
+    cache_dir : str, optional
+        Defaults to :func:`default_cache_dir`.
+    workers : callable, optional
+        As :func:`cached_roadmap`'s.
+
+    Returns
+    -------
+    (Roadmap, PlanningIndex) or None
+        None when there is no such entry, when it is damaged (it is left to
+        the next :func:`cached_planning` of it to rebuild), or when it was
+        built on another grid (an adaptive grid refined elsewhere).
+    """
+    refinement = getattr(grid, "refinement", None)
+    base = grid if refinement is None else grid.base
+    path = os.path.join(cache_dir or default_cache_dir(),
+                        cache_key(mechanism, base, refinement=refinement))
+    if not os.path.isdir(path):
+        return None
+    try:
+        roadmap, index = _load(path, (mechanism, base, refinement), workers)
+    except (InvalidInputError, OSError, ValueError):
+        return None
+    return (roadmap, index) if roadmap.grid == grid else None
 
 
 def save_planning_files(folder, roadmap, index):

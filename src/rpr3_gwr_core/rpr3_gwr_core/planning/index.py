@@ -168,7 +168,8 @@ class PlanningIndex:
             compute the node costs of; 0 needs none.
         graph_from : PlanningIndex, optional
             An index of the same roadmap whose node graph is taken rather
-            than built again.
+            than built again; returned as it is when it holds the gate
+            distances and node costs asked for already.
 
         Returns
         -------
@@ -185,6 +186,9 @@ class PlanningIndex:
             bare = cls(_graph_arrays(roadmap))
         else:
             _check_index(roadmap, graph_from.arrays())
+            if set(clearances) <= set(graph_from.clearances) \
+                    and all(graph_from.costs(w) is not None for w in weights):
+                return graph_from
             bare = cls(dict(graph_from.arrays(), **_no_tables(graph_from.n_nodes,
                                                                graph_from.pids.size)))
         arrays = bare.arrays()
