@@ -14,6 +14,8 @@ its last pose, in substeps, and matches it to the next slice's own cusps.
 """
 
 from dataclasses import dataclass
+import itertools
+
 import numba
 import numpy as np
 
@@ -206,9 +208,12 @@ def _seeds(field):
     mechanism, grid = field.mechanism, field.grid
     cells = np.flatnonzero(field.count >= 3)
     poses, aspect = field.poses[cells], field.aspect[cells]
-    distance = mechanism.pose_distance(poses[:, :, None, :], poses[:, None, :, :])
-    slots = np.arange(field.max_solutions)
-    distance[:, slots, slots] = np.inf
+    # Slot pair by slot pair: all pairs at once would broadcast the poses
+    # into copies a hundred times their size.
+    slots = field.max_solutions
+    distance = np.full((cells.size, slots, slots), np.inf)
+    for i, j in itertools.permutations(range(slots), 2):
+        distance[:, i, j] = mechanism.pose_distance(poses[:, i], poses[:, j])
     distance = np.where(np.isnan(distance), np.inf, distance)
     nearest = np.argsort(distance, axis=2)[:, :, :2]
     rows = np.arange(cells.size)[:, None]
