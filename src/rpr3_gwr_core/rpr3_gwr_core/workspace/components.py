@@ -11,7 +11,7 @@ order of their smallest node), so either gives the same labels.
 import numba
 import numpy as np
 
-__all__ = ["connected_labels"]
+__all__ = ["connected_labels", "find_root", "join"]
 
 
 def connected_labels(n_nodes, edges):
@@ -38,8 +38,10 @@ def connected_labels(n_nodes, edges):
 
 
 @numba.njit(cache=True, nogil=True)
-def _root(parent, node):
-    """The root of ``node``'s tree, halving the path on the way."""
+def find_root(parent, node):
+    """The root of ``node``'s tree in a union-find forest ``parent`` (int64
+    array, a root its own parent), halving the path on the way; compiled,
+    for other kernels' union-finds too."""
     while parent[node] != node:
         parent[node] = parent[parent[node]]
         node = parent[node]
@@ -47,15 +49,21 @@ def _root(parent, node):
 
 
 @numba.njit(cache=True, nogil=True)
+def join(parent, a, b):
+    """Join the trees of nodes ``a`` and ``b``.  The smaller root becomes the
+    parent, so a root is its component's smallest node."""
+    root_a, root_b = find_root(parent, a), find_root(parent, b)
+    if root_a < root_b:
+        parent[root_b] = root_a
+    elif root_b < root_a:
+        parent[root_a] = root_b
+
+
+@numba.njit(cache=True, nogil=True)
 def _union(parent, a, b):
-    """Join the trees of ``a[k]`` and ``b[k]`` for every k.  The smaller
-    root becomes the parent, so a root is its component's smallest node."""
+    """:func:`join` ``a[k]`` and ``b[k]`` for every k."""
     for k in range(a.size):
-        root_a, root_b = _root(parent, a[k]), _root(parent, b[k])
-        if root_a < root_b:
-            parent[root_b] = root_a
-        elif root_b < root_a:
-            parent[root_a] = root_b
+        join(parent, a[k], b[k])
 
 
 @numba.njit(cache=True, nogil=True)
@@ -65,7 +73,7 @@ def _labels(parent):
     label = np.empty(parent.size, dtype=np.int32)
     count = 0
     for node in range(parent.size):
-        root = _root(parent, node)
+        root = find_root(parent, node)
         if root == node:
             label[node] = count
             count += 1

@@ -24,6 +24,7 @@ import numba
 import numpy as np
 
 from ..exceptions import InvalidInputError
+from ..workspace.components import find_root, join
 from .collision import FREE, check_bodies, compile_scene
 from .scene import EMPTY_SCENE
 
@@ -263,7 +264,8 @@ class SceneRoadmap:
         self.part = part.reshape(-1, width)
         self.part_patch = index._patch[first].astype(np.int32)
         self.component = np.empty(first.size, dtype=np.int32)
-        roots = np.array([_find(component_parent, d) for d in first.tolist()], dtype=np.int64)
+        roots = np.array([find_root(component_parent, d) for d in first.tolist()],
+                         dtype=np.int64)
         self.component[:] = np.unique(roots, return_inverse=True)[1]
         pairs = [_gate_pairs(lower, upper, match, index._patch, part, width)
                  for lower, upper, match in index._links]
@@ -420,25 +422,6 @@ def _near_obstacles(boxes, obstacles, blocked):
 
 
 @numba.njit(cache=True, nogil=True)
-def _find(parent, a):
-    while parent[a] != a:
-        parent[a] = parent[parent[a]]
-        a = parent[a]
-    return a
-
-
-@numba.njit(cache=True, nogil=True)
-def _union(parent, a, b):
-    a, b = _find(parent, a), _find(parent, b)
-    if a != b:
-        # The lower disk is the root, so labels follow the disks' order.
-        if a < b:
-            parent[b] = a
-        else:
-            parent[a] = b
-
-
-@numba.njit(cache=True, nogil=True)
 def _join_axis(part_parent, component_parent, lower, upper, match, patch, free, width):
     """Join the free patch solutions one axis's links join: within a patch
     in ``part_parent``, across gates too in ``component_parent``."""
@@ -450,9 +433,9 @@ def _join_axis(part_parent, component_parent, lower, upper, match, patch, free, 
             a, b = lower[k] * width + i, upper[k] * width + j
             if not (free[a] and free[b]) or patch[a] <= 0 or patch[b] <= 0:
                 continue
-            _union(component_parent, a, b)
+            join(component_parent, a, b)
             if patch[a] == patch[b]:
-                _union(part_parent, a, b)
+                join(part_parent, a, b)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -465,7 +448,7 @@ def _label(parent, free):
     for d in range(parent.size):
         if not free[d]:
             continue
-        root = _find(parent, d)
+        root = find_root(parent, d)
         if label[root] < 0:
             label[root] = n
             first[n] = d
