@@ -45,8 +45,7 @@ An entry that passes is stamped (``checked.json``: the header's checksum
 and the size, modification time and inode of each of its files), and a
 later load whose files all still match the stamp checks the header and the
 planning index's shapes and ranges only, mapping the arrays without reading
-them: the pages a plan never touches are never read, a third of a second
-and more saved on the full 3-DOF roadmap's entry.  A file rewritten,
+them: the pages a plan never touches are never read.  A file rewritten,
 replaced or copied no longer matches, and its entry is checked in full
 again; damage that leaves a file's size, times and inode as they were (a
 failing disk under the file system) is caught only by a load that checks in
@@ -427,8 +426,9 @@ def _load(folder, expected=None, workers=map):
     areas = arrays.pop(_AREA)
     arrays["links"] = [arrays.pop(f"links_{k}")
                        for k in range(len(arrays) - len(FIELD_TYPES))]
-    # Nothing compiled reads the arrays before their values are checked:
-    # the tables spare the derivations that would.
+    # Nothing compiled reads the arrays before their values are checked,
+    # here or by the load that stamped the entry: the tables spare the
+    # derivations that would.
     roadmap = roadmap_from_arrays(header["mechanism"], header["grid"], arrays, tables, areas,
                                   check=not checked)
     if not checked:
