@@ -1,5 +1,5 @@
 """The compiled paths of the slice builds against the numpy arithmetic they
-replace, bit for bit: the distance between poses and the separation of a
+replace, bit for bit: the difference and distance of poses and the separation of a
 cell's solutions (:class:`~rpr3_gwr_core.mechanisms.base.Mechanism`), the
 field's separation taken chunk by chunk, and the 3-RPR solver's per-root
 work for base points per row (:func:`~rpr3_gwr_core.mechanisms.rpr3.solve_with_bases`)."""
@@ -22,8 +22,30 @@ def same_bits(a, b):
     return a.shape == b.shape and np.array_equal(a.view(np.uint8), b.view(np.uint8))
 
 
+def numpy_difference(m, a, b):
+    """The pose difference in numpy: angles wrapped by numpy's remainder."""
+    difference = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)
+    for k in np.flatnonzero(m.angular):
+        difference[..., k] = (np.pi - np.remainder(np.pi - difference[..., k], 2 * np.pi)) \
+            * m.scale
+    return difference
+
+
 def numpy_distance(m, a, b):
-    return np.linalg.norm(m.pose_difference(a, b), axis=-1)
+    return np.linalg.norm(numpy_difference(m, a, b), axis=-1)
+
+
+@pytest.mark.parametrize("m", [PAPER_GEOMETRY, DEFAULT_FIVE_BAR])
+def test_pose_difference_is_numpys_to_the_bit(m):
+    rng = np.random.default_rng(4)
+    a, b = rng.normal(size=(3000, m.pose_size)) * 20, rng.normal(size=(3000, m.pose_size)) * 20
+    b[::4, -1] = a[::4, -1] + rng.choice([-3, -1, 0, 1, 3], 750) * math.pi
+    a[::7, 0], b[::11, -1], a[::13, -1] = np.nan, np.inf, -0.0
+    with np.errstate(invalid="ignore"):
+        assert same_bits(m.pose_difference(a, b), numpy_difference(m, a, b))
+        assert same_bits(m.pose_difference(a[:5, None], b[None, :4]),
+                         numpy_difference(m, a[:5, None], b[None, :4]))
+    assert m.pose_difference(a[0], b[0]).shape == (m.pose_size,)
 
 
 @pytest.mark.parametrize("m", [PAPER_GEOMETRY, DEFAULT_FIVE_BAR])

@@ -294,20 +294,14 @@ class Mechanism(abc.ABC):
 
     def pose_difference(self, a, b):
         """``a - b`` with angles wrapped and measured as arc length at ``scale``."""
-        difference = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)
-        for k in np.flatnonzero(self.angular):
-            difference[..., k] = (np.pi - np.remainder(np.pi - difference[..., k], 2 * np.pi)) \
-                * self.scale
-        return difference
+        shape, a, b = _pose_rows(a, b)
+        return _pose_differences(a, b, np.array(self.angular, dtype=bool),
+                                 float(self.scale)).reshape(shape)
 
     def pose_distance(self, a, b):
         """Euclidean norm of :meth:`pose_difference` [length unit], shape (...)."""
-        a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-        shape = np.broadcast_shapes(a.shape, b.shape)
-        a, b = np.broadcast_to(a, shape), np.broadcast_to(b, shape)
-        size = shape[-1]
-        distance = _pose_distances(a.reshape(-1, size), b.reshape(-1, size),
-                                   np.array(self.angular, dtype=bool), float(self.scale))
+        shape, a, b = _pose_rows(a, b)
+        distance = _pose_distances(a, b, np.array(self.angular, dtype=bool), float(self.scale))
         return distance.reshape(shape[:-1])[()]
 
     def separation(self, poses, count):
@@ -335,28 +329,55 @@ class Mechanism(abc.ABC):
                      for v, angle in zip(pose, self.angular))
 
 
+def _pose_rows(a, b):
+    """Poses ``a`` and ``b`` broadcast together: their shape, and each as
+    rows (n, pose size)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    shape = np.broadcast_shapes(a.shape, b.shape)
+    size = shape[-1]
+    return (shape, np.broadcast_to(a, shape).reshape(-1, size),
+            np.broadcast_to(b, shape).reshape(-1, size))
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _coordinate_difference(a, b, angular, scale):
+    """``a - b`` of one coordinate; an angle's wrapped into [-pi, pi) as
+    ``pi - remainder(pi - d, 2 pi)`` (numpy's remainder, to the bit) and
+    measured as arc length at ``scale``."""
+    difference = a - b
+    if angular:
+        turned = np.pi - difference
+        # The remainder of a value within a turn is exact: the value, or
+        # the value plus a turn; fmod, slow, only for the others.
+        if not abs(turned) < 2 * np.pi:
+            turned = np.remainder(turned, 2 * np.pi)
+        elif turned < 0:
+            turned += 2 * np.pi
+        difference = (np.pi - turned) * scale
+    return difference
+
+
 @numba.njit(cache=True, nogil=True)
 def _distance(a, b, angular, scale):
-    """:meth:`Mechanism.pose_distance` of two poses, ``angular`` per coordinate.
-
-    The operations are :meth:`Mechanism.pose_difference`'s and the norm's,
-    in their order (squares summed from the first coordinate on), so the
-    distance is numpy's to the bit.
-    """
+    """:meth:`Mechanism.pose_distance` of two poses, ``angular`` per
+    coordinate: squares summed from the first coordinate on, as numpy's norm
+    sums them."""
     total = 0.0
     for k in range(a.size):
-        difference = a[k] - b[k]
-        if angular[k]:
-            turned = np.pi - difference
-            # The remainder of a value within a turn is exact: the value, or
-            # the value plus a turn; fmod, slow, only for the others.
-            if not abs(turned) < 2 * np.pi:
-                turned = np.remainder(turned, 2 * np.pi)
-            elif turned < 0:
-                turned += 2 * np.pi
-            difference = (np.pi - turned) * scale
+        difference = _coordinate_difference(a[k], b[k], angular[k], scale)
         total += difference * difference
     return math.sqrt(total)
+
+
+@numba.njit(cache=True, nogil=True)
+def _pose_differences(a, b, angular, scale):
+    """:meth:`Mechanism.pose_difference` of the rows of ``a`` and ``b``,
+    shape (n, pose_size)."""
+    out = np.empty(a.shape)
+    for r in range(a.shape[0]):
+        for k in range(a.shape[1]):
+            out[r, k] = _coordinate_difference(a[r, k], b[r, k], angular[k], scale)
+    return out
 
 
 @numba.njit(cache=True, nogil=True)
