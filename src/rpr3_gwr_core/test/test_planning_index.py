@@ -15,6 +15,8 @@ from rpr3_gwr_core.exceptions import InvalidInputError
 from rpr3_gwr_core.io.cache import cached_planning
 from rpr3_gwr_core.paper import rho1_slice
 from rpr3_gwr_core.planning import DEFAULT_CLEARANCE, PlanningIndex, PlanOptions, Planner
+from rpr3_gwr_core.planning.index import COST_UNITS
+from rpr3_gwr_core.planning.local_planning import LocalPlanner
 
 D = math.radians
 GRID = rho1_slice(rho1=17, step=0.25)
@@ -134,3 +136,16 @@ def test_the_centroids_and_gate_middles_are_the_cells_means(cached):
         a, b = sorted((int(index.pids[k]), int(index.pids[other])))
         faces = seg.gates[a, b].faces
         np.testing.assert_allclose(middle, grid.joints_at(faces.ravel())[:, [1, 2]].mean(axis=0))
+
+
+def test_the_cost_floors_are_each_patch_s_smallest_node_cost(cached):
+    """The floor scales the search's estimate: below the patch's smallest
+    cost it weakens the estimate, above it the path is no longer least-cost."""
+    _, roadmap, index = cached
+    weight = index.weights[0]
+    costs, floors = index.costs(weight)
+    on_first_use = LocalPlanner(roadmap, PlanningIndex.build(roadmap))
+    for k in range(index.pids.size):
+        smallest = costs[index.offsets[k]:index.offsets[k + 1]].min()
+        assert floors[k] == smallest >= COST_UNITS
+        assert on_first_use._costs(weight, k)[1] == smallest

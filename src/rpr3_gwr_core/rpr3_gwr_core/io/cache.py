@@ -104,9 +104,9 @@ __all__ = ["CacheWarning", "DEFAULT_MAX_BYTES", "STALE_STAGING_SECONDS", "defaul
 
 # Bump when a change of the algorithms changes roadmaps, so old entries are not reused.
 ALGORITHM_REVISION = 5
-# Bump when the files of an entry change, so old entries are misses (evicted in
-# their turn) rather than damaged entries.
-ENTRY_LAYOUT = 6
+# Bump when the files of an entry, or what its planning index holds, change, so
+# old entries are misses (evicted in their turn) rather than damaged entries.
+ENTRY_LAYOUT = 7
 
 DEFAULT_MAX_BYTES = 4 * 2**30
 """Default bound of the cache's entries [bytes]."""

@@ -207,7 +207,7 @@ class PlanningIndex:
             for k in range(bare.pids.size):
                 cost = patch_costs(roadmap.segmentation, bare, weight, k)
                 arrays["node_costs"][j, bare.offsets[k]:bare.offsets[k + 1]] = cost
-                arrays["cost_floors"][j, k] = cost.min(initial=1)
+                arrays["cost_floors"][j, k] = cost.min()
         return cls(arrays)
 
     @classmethod

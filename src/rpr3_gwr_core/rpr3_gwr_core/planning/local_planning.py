@@ -107,7 +107,7 @@ class LocalPlanner:
         if k not in floors:
             cost = patch_costs(self.segmentation, self.index, weight, k)
             costs[self.index.offsets[k]:self.index.offsets[k + 1]] = cost
-            floors[k] = int(cost.min(initial=1))
+            floors[k] = int(cost.min())
         return costs, floors[k]
 
     def _scene_margins(self, world):
