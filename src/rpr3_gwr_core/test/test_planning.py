@@ -147,6 +147,38 @@ def test_local_paths_cost_what_dijkstra_finds(planner, paper_roadmap, clearance)
     assert checked >= 4
 
 
+@pytest.mark.parametrize("inflation", [2, 3])
+def test_an_inflated_estimate_costs_at_most_its_factor_more(planner, paper_roadmap, inflation):
+    """Weighted A*: the path found costs between the least and ``inflation``
+    times it, and runs from the start cell to the goal cell."""
+    rng = np.random.default_rng(7)
+    seg = paper_roadmap.segmentation
+    checked = 0
+    for _ in range(12):
+        start_patch, goal_patch = rng.choice(sorted(seg.patches), 2)
+        if not feasibility(planner.global_index, start_patch, goal_patch).feasible:
+            continue
+        path = global_paths(planner.global_index, start_patch, goal_patch)[0].patches
+        start_cell = int(rng.choice(seg.patches[path[0]].cells))
+        goal_cell = int(rng.choice(seg.patches[path[-1]].cells))
+        local = planner.local.plan(path, start_cell, goal_cell, clearance=0.02,
+                                   inflation=inflation)
+        least = _layered_reference_cost(paper_roadmap, path, start_cell, goal_cell, 0.02)
+        assert least * (1 - 1e-9) <= local.cost <= inflation * least * (1 + 1e-9), path
+        assert (local.cells[0], local.cells[-1]) == (start_cell, goal_cell)
+        checked += 1
+    assert checked >= 4
+
+
+@pytest.mark.parametrize("inflation", [0, 1.5, True])
+def test_an_inflation_that_is_not_a_whole_factor_is_refused(planner, paper_roadmap,
+                                                             inflation):
+    pid = min(paper_roadmap.segmentation.patches)
+    cells = paper_roadmap.segmentation.patches[pid].cells
+    with pytest.raises(InvalidInputError, match="inflation"):
+        planner.local.plan((pid,), int(cells[0]), int(cells[-1]), inflation=inflation)
+
+
 class _InterpretedThreeRPR(ThreeRPR):
     """The paper's geometry without its compiled step: the validator then
     runs its loop in the interpreter, on :meth:`ThreeRPR.step`."""

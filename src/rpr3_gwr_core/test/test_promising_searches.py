@@ -149,7 +149,7 @@ def test_smoothing_pulls_full_roadmap_paths_taut(full_planner):
 # Pairs drawn with seed 11 whose local paths keep failing the clearance's
 # quarter at a singular sliver thinner than a cell: every repair is refused,
 # and the plan is one of the tried paths that keeps min_margin.
-FALLBACK_SEED, FALLBACK_PAIRS = 11, (31, 83, 110, 175, 268)
+FALLBACK_SEED, FALLBACK_PAIRS = 11, (31, 110, 175)
 
 
 def test_paths_kept_after_failed_repairs_pass_the_independent_continuation(

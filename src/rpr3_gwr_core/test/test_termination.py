@@ -78,7 +78,8 @@ def test_the_cli_answers_a_passed_time_limit_with_a_timeout_error(capsys):
 
 
 @pytest.mark.parametrize("bad", [{"global_paths": 0}, {"repairs": -1}, {"split_shortcuts": 1.5},
-                                 {"detour_weight": math.nan}, {"repairs": True}])
+                                 {"detour_weight": math.nan}, {"repairs": True},
+                                 {"detour_inflation": 0}, {"detour_inflation": 2.0}])
 def test_retries_refuse_what_cannot_be_counted(bad):
     from rpr3_gwr_core.planning import Retries
 

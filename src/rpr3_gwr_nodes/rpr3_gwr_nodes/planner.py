@@ -107,7 +107,7 @@ Parameters  clearance (0.02), default_max_velocity (1.0),
             plan_workers (one per core, read-only), mechanism_file ('' takes
             any roadmap's mechanism, read-only), promising_nodes,
             retry_global_paths, retry_repairs, retry_split_shortcuts,
-            detour_weight (read-only)
+            detour_weight, detour_inflation (read-only)
 Example     ros2 run rpr3_gwr_nodes planner --ros-args -p plan_workers:=0 -p clearance:=0.05
 """
 
@@ -259,6 +259,11 @@ class PlannerNode(Node):
                         "tried when the shortest ones cannot be repaired",
             floating_point_range=[FloatingPointRange(from_value=0.0, to_value=1000.0)],
             read_only=True))
+        self.declare_parameter("detour_inflation", defaults.detour_inflation, ParameterDescriptor(
+            description="Factor on the estimate of those paths' searches (weighted A*): they "
+                        "cost at most this many times the least and settle far fewer nodes; "
+                        "1 gives least-cost paths",
+            integer_range=[IntegerRange(from_value=1, to_value=100, step=1)], read_only=True))
         self.declare_parameter("promising_nodes", defaults.promising_nodes, ParameterDescriptor(
             description="Nodes each local search may settle, on a roadmap of all the joints, "
                         "in the two most promising searches tried before the global paths "
@@ -270,7 +275,8 @@ class PlannerNode(Node):
             global_paths=self.get_parameter("retry_global_paths").value,
             repairs=self.get_parameter("retry_repairs").value,
             split_shortcuts=self.get_parameter("retry_split_shortcuts").value,
-            detour_weight=self.get_parameter("detour_weight").value)
+            detour_weight=self.get_parameter("detour_weight").value,
+            detour_inflation=self.get_parameter("detour_inflation").value)
         self.declare_parameter("mechanism_file", "", ParameterDescriptor(
             description="Mechanism file (as the builder's); given, roadmaps of another "
                         "mechanism are ignored with an error; empty, the planner plans on the "

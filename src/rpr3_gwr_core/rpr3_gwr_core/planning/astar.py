@@ -114,7 +114,8 @@ class Guide(NamedTuple):
     ----------
     cost_floor : int
         Smallest ``node_cost`` on the path's patches (scales the heuristic);
-        0 searches without heuristic.
+        0 searches without heuristic; ``k`` times it inflates the estimate
+        (weighted A*): the path found costs at most ``k`` times the least.
     fields : ndarray of int64
         :func:`gate_distances` of patches, each at an offset of its own.
     to_gate_start, rest : ndarray of int64, shape (layers,)
@@ -397,7 +398,8 @@ def _search(graph, costs, layer, sources, target, blocked, guide, stop, work):
                             at = fields[landmark_start[j] + v]
                             if at < UNREACHED and landmark_goal[j] < UNREACHED:
                                 length = max(length, abs(at - landmark_goal[j]))
-                # A consistent estimate never puts a key behind the current one.
+                # A consistent estimate never puts a key behind the current one;
+                # an inflated one may, and such a node is settled next.
                 key = max(current, reach + cost_floor * length)
                 if key < current + _RING:
                     bucket = key % _RING

@@ -32,6 +32,7 @@ requests in several threads plan at once.
 from dataclasses import dataclass
 import heapq
 import math
+import numbers
 import threading
 
 import numpy as np
@@ -344,7 +345,7 @@ class LocalPlanner:
 
     def plan(self, patches, start_cell, goal_cell, blocked=(), clearance=0.0,
              clearance_weight=DEFAULT_CLEARANCE_WEIGHT, termination=NEVER, any_gates=False,
-             most_settled=None, world=None):
+             most_settled=None, world=None, inflation=1):
         """Best cell path from a start cell to a goal cell through given patches,
         or through any.
 
@@ -379,6 +380,11 @@ class LocalPlanner:
             A scene (:meth:`~rpr3_gwr_core.world.WorldIndex.apply`): the
             solutions it blocks are not entered, and those crowding its
             obstacles cost as those below the clearance.
+        inflation : int
+            Factor on the search's estimate (weighted A*): the path costs at
+            most this many times the least, found after settling fewer
+            nodes where the estimate falls far below the costs (a positive
+            ``clearance_weight``); 1 gives a least-cost path.
 
         Returns
         -------
@@ -388,8 +394,9 @@ class LocalPlanner:
         ------
         InvalidInputError
             If a patch is not in the roadmap or repeats, the cells are not in
-            the end patches, two consecutive patches share no gate, or the
-            weight is negative.
+            the end patches, two consecutive patches share no gate, the
+            weight is negative or the inflation not a whole number of at
+            least 1.
         InfeasiblePathError
             If no path exists (a patch's solutions are cut between its gates).
         PlanningTimeoutError
@@ -398,6 +405,10 @@ class LocalPlanner:
         pids = self.index.pids
         if not (math.isfinite(clearance_weight) and clearance_weight >= 0):
             raise InvalidInputError("clearance_weight must be finite and non-negative")
+        if isinstance(inflation, bool) or not isinstance(inflation, numbers.Integral) \
+                or inflation < 1:
+            raise InvalidInputError(f"inflation must be a whole number of at least 1, got "
+                                    f"{inflation!r}")
         weight, clearance = float(clearance_weight), float(clearance)
         blocked = np.array(sorted(blocked), dtype=np.int64)
         if any_gates:
@@ -410,7 +421,8 @@ class LocalPlanner:
         margins = self.index.node_margin if world is None else self._scene_margins(world)
         nodes, cost = layered_astar(
             graph, NodeCosts(costs, margins, clearance, LOW_MARGIN_FACTOR),
-            layer, source, target, blocked, guide,
+            layer, source, target, blocked,
+            guide._replace(cost_floor=guide.cost_floor * int(inflation)),
             Stop(termination.deadline, 2**62 if most_settled is None else int(most_settled)),
             self._work_arrays())
         if cost == TIMED_OUT:

@@ -28,6 +28,7 @@ and the plan is an error when none passes.
 
 import dataclasses
 from dataclasses import dataclass, field as dataclass_field
+import functools
 import itertools
 import math
 import numbers
@@ -54,6 +55,10 @@ DEFAULT_CLEARANCE = 2e-2
 _SAMPLES_PER_CELL = 5
 # A followed pose this far from its waypoint's solution [scale] is on another sheet.
 _STRAYED = 1e-4
+# A repair searches again the cell path's stretch from this many cells before
+# the refused step to as many after it, times the repair's number: as far as
+# the box of blocked cells around the step grows.
+_REPAIR_REACH = 8
 
 
 @dataclass(frozen=True)
@@ -84,6 +89,12 @@ class Retries:
         The paper's clearance weight ``w`` (cell cost ``1 + w / d``) of the
         paths tried when the shortest ones cannot be repaired: they keep to
         the middle of their patches.
+    detour_inflation : int
+        Factor on the estimate of those paths' searches (weighted A*): a
+        path then costs at most this many times the least, and the search
+        settles a fraction of the nodes, since the estimate of the weighted
+        costs, from lengths alone, falls far below them; 1 gives least-cost
+        paths.
     """
 
     global_paths: int = 16
@@ -91,14 +102,17 @@ class Retries:
     repairs: int = 4
     split_shortcuts: int = 6
     detour_weight: float = 10.0
+    detour_inflation: int = 3
 
     def __post_init__(self):
-        for name in ("global_paths", "repairs", "split_shortcuts", "promising_nodes"):
+        for name in ("global_paths", "repairs", "split_shortcuts", "promising_nodes",
+                     "detour_inflation"):
             value = getattr(self, name)
+            least = 1 if name in ("global_paths", "detour_inflation") else 0
             if isinstance(value, bool) or not isinstance(value, numbers.Integral) \
-                    or value < (1 if name == "global_paths" else 0):
+                    or value < least:
                 raise InvalidInputError(f"{name} must be a whole number of at least "
-                                        f"{1 if name == 'global_paths' else 0}, got {value!r}")
+                                        f"{least}, got {value!r}")
         if not (math.isfinite(self.detour_weight) and self.detour_weight >= 0):
             raise InvalidInputError(f"detour_weight must be finite and non-negative, got "
                                     f"{self.detour_weight!r}")
@@ -513,8 +527,12 @@ class Planner:
         return GlobalPath(route, self.global_index.path_cost(route)), result, joints, patches
 
     def _weights(self):
-        """The clearance weights a global path's local path is tried with."""
-        return dict.fromkeys((self.clearance_weight, self.retries.detour_weight))
+        """The clearance weights a global path's local path is tried with,
+        each with the inflation of its searches' estimate."""
+        if self.clearance_weight == self.retries.detour_weight:
+            return {self.clearance_weight: 1}
+        return {self.clearance_weight: 1,
+                self.retries.detour_weight: self.retries.detour_inflation}
 
     def _attempts(self, paths, start_patch, goal_patch):
         """The listed global paths, then longer ones, ``retries.global_paths`` in all;
@@ -535,17 +553,19 @@ class Planner:
         where the shortcut path passes too; when every repair of the
         shortest path fails, the same for the path the paper's clearance
         weight keeps in the middle of its patches."""
-        for weight in self._weights():
+        for weight, inflation in self._weights().items():
             result, joints, patches, _ = self._repaired_path(path, s, g, clearance, weight,
-                                                             termination, most_settled, world)
+                                                             termination, most_settled, world,
+                                                             inflation)
             if result.ok:
                 break
         return result, joints, patches
 
     def _repaired_path(self, path, s, g, clearance, weight, termination, most_settled=None,
-                       world=None):
+                       world=None, inflation=1):
         """Local path along a global path (through any gates when None),
-        repaired where the validator refuses it.
+        repaired where the validator refuses it; ``inflation`` as the local
+        planner's.
 
         The path's cells keep the clearance where they can, but between two
         cell centres next to a cusp point, or over a singular sliver thinner
@@ -553,8 +573,10 @@ class Planner:
         The path must therefore keep a quarter of the clearance (or what the start
         and goal allow) in the validator; where it does not, the cells
         around the step where it dipped are blocked, in a box growing with
-        each repair, and the local path planned again, a few times, before a
-        path that keeps ``min_margin`` will do.
+        each repair, and the stretch of the cell path around them planned
+        again (the whole path at the last repair, or when the stretch finds
+        no way round), a few times, before a path that keeps ``min_margin``
+        will do.
 
         Returns the validation, the legs and patches of the waypoints, and
         the patches the cell path crosses, in order.
@@ -563,19 +585,27 @@ class Planner:
         blocked = set()
         tried = []
         free = list(self.roadmap.grid.axis_joints)
+        search = functools.partial(self.local.plan, clearance=clearance,
+                                   clearance_weight=weight, termination=termination,
+                                   any_gates=path is None, most_settled=most_settled,
+                                   world=world, inflation=inflation)
+        route = (s.patch, g.patch) if path is None else path.patches
+        stretch = None
         for repair in range(self.retries.repairs + 1):
             if termination():
                 raise PlanningTimeoutError("the time limit passed")
             try:
-                local = self.local.plan((s.patch, g.patch) if path is None else path.patches,
-                                        s.cell, g.cell, blocked, clearance, weight, termination,
-                                        any_gates=path is None, most_settled=most_settled,
-                                        world=world)
+                if stretch is None or repair == self.retries.repairs:
+                    local = search(route, s.cell, g.cell, blocked)
+                    cells, cell_patches = local.cells, local.patches
+                else:
+                    cells, cell_patches = self._rerouted(search, route, s, g, cells,
+                                                         cell_patches, stretch, blocked)
             except InfeasiblePathError:
                 if not blocked:
                     raise
                 break  # the blocked cells cut the patches
-            joints, patches, cells = self._waypoints(s, g, local)
+            joints, patches, origin = self._waypoints(s, g, cells, cell_patches)
             result, kept = self._shortcut_validated(joints, patches, s, g, clearance, keep,
                                                     world)
             tried.append((joints, patches, kept))
@@ -587,7 +617,12 @@ class Planner:
             a, b = kept[k - 1], kept[k]
             middle = 0.5 * (joints[a, free] + joints[b, free])
             around = self.local.cells_around(middle, 0.5 + repair).tolist()
-            blocked.update(set(around + [cells[a], cells[b]]) - {s.cell, g.cell, -1})
+            ends = origin[[a, b]]
+            blocked.update(set(around + cells[ends[ends >= 0]].tolist())
+                           - {s.cell, g.cell})
+            reach = _REPAIR_REACH * (repair + 1)
+            stretch = (max(0, (ends[0] if ends[0] >= 0 else 0) - reach),
+                       min(cells.size - 1, (ends[1] if ends[1] >= 0 else cells.size) + reach))
         # Blocking steps can also lead somewhere worse: the last path, else
         # the first, if it keeps min_margin, shortcut as it was tried (it
         # missed only the clearance's quarter), else whole.
@@ -597,6 +632,29 @@ class Planner:
                 if result.ok:
                     return result, joints[waypoints], patches[waypoints], _crossed(patches)
         return result, joints, patches, _crossed(patches)
+
+    @staticmethod
+    def _rerouted(search, route, s, g, cells, patches, stretch, blocked):
+        """A cell path with the stretch from index ``stretch[0]`` to
+        ``stretch[1]`` searched again (``search``: the local planner's, as
+        for the whole path ``route``) around the blocked cells; the whole
+        path searched again when the stretch is all of it or has no way
+        round.  Returns the cells and their patches."""
+        first, last = stretch
+        if first > 0 or last < cells.size - 1:
+            ends = {int(cells[first]), int(cells[last])}
+            through = _crossed(patches[first:last + 1])
+            if search.keywords["any_gates"]:
+                through = (through[0], through[-1])
+            try:
+                local = search(through, cells[first], cells[last], blocked - ends)
+            except InfeasiblePathError:
+                pass
+            else:
+                return (np.concatenate([cells[:first], local.cells, cells[last + 1:]]),
+                        np.concatenate([patches[:first], local.patches, patches[last + 1:]]))
+        local = search(route, s.cell, g.cell, blocked)
+        return local.cells, local.patches
 
     def _shortcut_validated(self, joints, patches, s, g, clearance, keep, world=None):
         """The shortcut path's validation and kept waypoints; a shortcut the
@@ -768,21 +826,22 @@ class Planner:
         for key, index in other._world_indices.items():
             self._world_indices.setdefault(key, index.on_roadmap(self.roadmap))
 
-    def _waypoints(self, s, g, local):
-        """Exact start, the cell centres, exact goal; repeated points dropped;
-        continuous along periodic axes (from the start's values, so the goal's
-        may differ from those asked by whole turns).
+    def _waypoints(self, s, g, cells, patches):
+        """Exact start, the centres of a cell path's ``cells`` (of ``patches``),
+        exact goal; repeated points dropped; continuous along periodic axes
+        (from the start's values, so the goal's may differ from those asked
+        by whole turns).
 
-        Returns the legs, the patch of each waypoint and its cell (-1 for
-        the exact start and goal)."""
-        joints = np.vstack([s.joints, self.roadmap.grid.joints_at(local.cells), g.joints])
+        Returns the legs, the patch of each waypoint and its index in
+        ``cells`` (-1 for the exact start and goal)."""
+        joints = np.vstack([s.joints, self.roadmap.grid.joints_at(cells), g.joints])
         if self.roadmap.grid.periodic:
             joints = self.roadmap.grid.unwrap(joints)
-        patches = np.concatenate([[s.patch], local.patches, [g.patch]])
-        cells = np.concatenate([[-1], local.cells, [-1]])
+        patches = np.concatenate([[s.patch], patches, [g.patch]])
+        origin = np.concatenate([[-1], np.arange(len(cells)), [-1]])
         keep = np.ones(len(joints), dtype=bool)
         keep[1:] = np.any(np.abs(np.diff(joints, axis=0)) > 1e-12, axis=1)
-        return joints[keep], patches[keep], cells[keep]
+        return joints[keep], patches[keep], origin[keep]
 
     def _waypoint_margins(self, joints, patches):
         """Margin of each waypoint's patch solution at its cell, 0 where that
