@@ -590,21 +590,23 @@ class Planner:
                                    any_gates=path is None, most_settled=most_settled,
                                    world=world, inflation=inflation)
         route = (s.patch, g.patch) if path is None else path.patches
-        stretch = None
+        cell_path = stretch = None
         for repair in range(self.retries.repairs + 1):
             if termination():
                 raise PlanningTimeoutError("the time limit passed")
             try:
-                if stretch is None or repair == self.retries.repairs:
-                    local = search(route, s.cell, g.cell, blocked)
-                    cells, cell_patches = local.cells, local.patches
+                if stretch is not None and repair < self.retries.repairs:
+                    cell_path = _rerouted(search, *cell_path, stretch, blocked, path is None)
                 else:
-                    cells, cell_patches = self._rerouted(search, route, s, g, cells,
-                                                         cell_patches, stretch, blocked)
+                    cell_path = None
+                if cell_path is None:
+                    local = search(route, s.cell, g.cell, blocked)
+                    cell_path = local.cells, local.patches
             except InfeasiblePathError:
                 if not blocked:
                     raise
                 break  # the blocked cells cut the patches
+            cells, cell_patches = cell_path
             joints, patches, origin = self._waypoints(s, g, cells, cell_patches)
             result, kept = self._shortcut_validated(joints, patches, s, g, clearance, keep,
                                                     world)
@@ -620,9 +622,10 @@ class Planner:
             ends = origin[[a, b]]
             blocked.update(set(around + cells[ends[ends >= 0]].tolist())
                            - {s.cell, g.cell})
+            first = ends[0] if ends[0] >= 0 else 0
+            last = ends[1] if ends[1] >= 0 else cells.size - 1
             reach = _REPAIR_REACH * (repair + 1)
-            stretch = (max(0, (ends[0] if ends[0] >= 0 else 0) - reach),
-                       min(cells.size - 1, (ends[1] if ends[1] >= 0 else cells.size) + reach))
+            stretch = (max(0, first - reach), min(cells.size - 1, last + reach))
         # Blocking steps can also lead somewhere worse: the last path, else
         # the first, if it keeps min_margin, shortcut as it was tried (it
         # missed only the clearance's quarter), else whole.
@@ -632,29 +635,6 @@ class Planner:
                 if result.ok:
                     return result, joints[waypoints], patches[waypoints], _crossed(patches)
         return result, joints, patches, _crossed(patches)
-
-    @staticmethod
-    def _rerouted(search, route, s, g, cells, patches, stretch, blocked):
-        """A cell path with the stretch from index ``stretch[0]`` to
-        ``stretch[1]`` searched again (``search``: the local planner's, as
-        for the whole path ``route``) around the blocked cells; the whole
-        path searched again when the stretch is all of it or has no way
-        round.  Returns the cells and their patches."""
-        first, last = stretch
-        if first > 0 or last < cells.size - 1:
-            ends = {int(cells[first]), int(cells[last])}
-            through = _crossed(patches[first:last + 1])
-            if search.keywords["any_gates"]:
-                through = (through[0], through[-1])
-            try:
-                local = search(through, cells[first], cells[last], blocked - ends)
-            except InfeasiblePathError:
-                pass
-            else:
-                return (np.concatenate([cells[:first], local.cells, cells[last + 1:]]),
-                        np.concatenate([patches[:first], local.patches, patches[last + 1:]]))
-        local = search(route, s.cell, g.cell, blocked)
-        return local.cells, local.patches
 
     def _shortcut_validated(self, joints, patches, s, g, clearance, keep, world=None):
         """The shortcut path's validation and kept waypoints; a shortcut the
@@ -923,6 +903,27 @@ def _crossed(patches):
     """The patches a waypoint path crosses, in order, as a tuple of ids."""
     patches = np.asarray(patches)
     return tuple(int(p) for p in patches[np.concatenate([[True], patches[1:] != patches[:-1]])])
+
+
+def _rerouted(search, cells, patches, stretch, blocked, any_gates):
+    """A cell path (``cells`` of ``patches``) with its stretch from index
+    ``stretch[0]`` to ``stretch[1]`` searched again around the blocked cells
+    with ``search`` (the local planner's ``plan``, through any gates with
+    ``any_gates``); the cells and their patches, or None when the stretch is
+    the whole path or has no way round."""
+    first, last = stretch
+    if first == 0 and last == cells.size - 1:
+        return None
+    through = _crossed(patches[first:last + 1])
+    if any_gates:
+        through = (through[0], through[-1])
+    try:
+        local = search(through, cells[first], cells[last],
+                       blocked - {int(cells[first]), int(cells[last])})
+    except InfeasiblePathError:
+        return None
+    return (np.concatenate([cells[:first], local.cells, cells[last + 1:]]),
+            np.concatenate([patches[:first], local.patches, patches[last + 1:]]))
 
 
 def _turns(points):
