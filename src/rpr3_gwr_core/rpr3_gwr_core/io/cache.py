@@ -76,6 +76,7 @@ in the way), the roadmap is built and returned without being stored, with a
 """
 
 import hashlib
+import io
 import json
 import math
 import numbers
@@ -522,14 +523,23 @@ def _read(folder, name, spec, verify=True):
     when ``verify``."""
     with open(os.path.join(folder, name + ".npy"), "rb") as stream:
         version = np.lib.format.read_magic(stream)
-        readers = {(1, 0): np.lib.format.read_array_header_1_0,
-                   (2, 0): np.lib.format.read_array_header_2_0}
-        if version not in readers:
+        writers = {(1, 0): np.lib.format.write_array_header_1_0,
+                   (2, 0): np.lib.format.write_array_header_2_0}
+        if version not in writers:
             raise InvalidInputError(f"{name}.npy has .npy version {version}")
-        shape, fortran_order, dtype = readers[version](stream)
-        if dtype.str != spec["dtype"] or list(shape) != spec["shape"] or fortran_order:
-            raise InvalidInputError(f"{name}.npy holds {dtype.str} {shape}, the header lists "
-                                    f"{spec['dtype']} {tuple(spec['shape'])}")
+        # The file's header is compared with the one np.save writes for the
+        # listed dtype and shape, not parsed: numpy parses it with the ast
+        # module, whose bookkeeping on Python 3.11 (CPython gh-106905) raises
+        # SystemError at random when several threads parse at once.
+        dtype, shape = np.dtype(spec["dtype"]), tuple(spec["shape"])
+        expected = io.BytesIO()
+        writers[version](expected, {"descr": np.lib.format.dtype_to_descr(dtype),
+                                    "fortran_order": False, "shape": shape})
+        expected = expected.getvalue()
+        stream.seek(0)
+        if stream.read(len(expected)) != expected:
+            raise InvalidInputError(f"{name}.npy's header is not that of the {spec['dtype']} "
+                                    f"{shape} array the entry's header lists")
         size = dtype.itemsize * math.prod(shape)
         # Sized before mapping, so a wrong header never maps past the file's end.
         if os.fstat(stream.fileno()).st_size - stream.tell() != size:
