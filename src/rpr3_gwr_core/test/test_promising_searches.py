@@ -149,7 +149,7 @@ def test_smoothing_pulls_full_roadmap_paths_taut(full_planner):
 # Pairs drawn with seed 11 whose local paths keep failing the clearance's
 # quarter at a singular sliver thinner than a cell: every repair is refused,
 # and the plan is one of the tried paths that keeps min_margin.
-FALLBACK_SEED, FALLBACK_PAIRS = 11, (31, 110, 175)
+FALLBACK_SEED, FALLBACK_PAIRS = 11, (6, 31, 110, 268)
 
 
 def test_paths_kept_after_failed_repairs_pass_the_independent_continuation(
@@ -171,4 +171,36 @@ def test_paths_kept_after_failed_repairs_pass_the_independent_continuation(
         fell_back.clear()
         plan = full_planner.plan(start, goal)
         assert any(fell_back), k
+        assert_executable(plan, goal_pose, full_planner.min_margin)
+
+
+
+# Pairs drawn with seed 11 whose paths pass only after a repair.
+REPAIRED_PAIRS = (87, 163)
+
+
+def test_repairs_search_whole_paths_when_no_stretch_gives_a_valid_path(full_planner,
+                                                                       monkeypatch):
+    """Stretches that keep the refused path as it was (as where no way round
+    is near) leave the second round, whose repairs search whole paths."""
+    from rpr3_gwr_core.planning import planner as planner_module
+
+    pairs = same_aspect_pairs(random_full_configurations(
+        np.random.default_rng(FALLBACK_SEED), 600))
+    validated = Planner._validated_path
+    tried = []
+
+    def tracked(self, *args, **kwargs):
+        result = validated(self, *args, **kwargs)
+        tried.append((kwargs.get("reroute", True), result[0].ok))
+        return result
+
+    monkeypatch.setattr(Planner, "_validated_path", tracked)
+    monkeypatch.setattr(planner_module, "_rerouted",
+                        lambda search, cells, patches, *rest: (cells, patches))
+    for k in REPAIRED_PAIRS:
+        (start, _), (goal, goal_pose) = pairs[k]
+        tried.clear()
+        plan = full_planner.plan(start, goal)
+        assert tried[-1] == (False, True) and (True, True) not in tried, k
         assert_executable(plan, goal_pose, full_planner.min_margin)

@@ -458,6 +458,11 @@ class Planner:
         """The first global path (:meth:`_attempts`) whose local path passes
         the validator, with that validation, legs and waypoint patches.
 
+        Repairs first search again only a stretch of the refused path; when
+        no global path passes that way, they are tried again searching whole
+        paths, which finds ways round that leave the stretch (seldom needed,
+        and several times the work).
+
         Raises
         ------
         ValidationError
@@ -466,22 +471,28 @@ class Planner:
             When the deadline passes first.
         """
         failures = []
-        for path in self._attempts(paths, s.patch, g.patch):
-            try:
-                if termination():
-                    raise PlanningTimeoutError("the time limit passed")
-                result, joints, patches = self._validated_path(path, s, g, clearance,
-                                                               termination, world=world)
-            except InfeasiblePathError as exc:
-                failures.append(f"path {list(path.patches)}: {exc}")
-                continue
-            except PlanningTimeoutError as exc:
-                raise PlanningTimeoutError(
-                    f"{exc} after {len(failures)} global path(s) without a valid trajectory"
-                    + "".join(f"; {f}" for f in failures)) from None
-            if result.ok:
-                return path, result, joints, patches
-            failures.append(f"path {list(path.patches)}: {result.reason}")
+        unplanned = set()
+        for reroute in (True, False) if self.retries.repairs > 0 else (False,):
+            for path in self._attempts(paths, s.patch, g.patch):
+                if path.patches in unplanned:
+                    continue
+                name = f"path {list(path.patches)}{'' if reroute else ' searched whole'}"
+                try:
+                    if termination():
+                        raise PlanningTimeoutError("the time limit passed")
+                    result, joints, patches = self._validated_path(
+                        path, s, g, clearance, termination, world=world, reroute=reroute)
+                except InfeasiblePathError as exc:
+                    unplanned.add(path.patches)
+                    failures.append(f"{name}: {exc}")
+                    continue
+                except PlanningTimeoutError as exc:
+                    raise PlanningTimeoutError(
+                        f"{exc} after {len(failures)} global path(s) without a valid "
+                        "trajectory" + "".join(f"; {f}" for f in failures)) from None
+                if result.ok:
+                    return path, result, joints, patches
+                failures.append(f"{name}: {result.reason}")
         raise ValidationError("no global path gave a valid trajectory: " + "; ".join(failures))
 
     def _promising(self, s, g, clearance, termination, world=None):
@@ -548,21 +559,22 @@ class Planner:
             yield path
 
     def _validated_path(self, path, s, g, clearance, termination, most_settled=None,
-                        world=None):
+                        world=None, reroute=True):
         """Local path along a global path that passes the validator, shortcut
         where the shortcut path passes too; when every repair of the
         shortest path fails, the same for the path the paper's clearance
-        weight keeps in the middle of its patches."""
+        weight keeps in the middle of its patches; ``reroute`` as
+        :meth:`_repaired_path`'s."""
         for weight, inflation in self._weights().items():
             result, joints, patches, _ = self._repaired_path(path, s, g, clearance, weight,
                                                              termination, most_settled, world,
-                                                             inflation)
+                                                             inflation, reroute)
             if result.ok:
                 break
         return result, joints, patches
 
     def _repaired_path(self, path, s, g, clearance, weight, termination, most_settled=None,
-                       world=None, inflation=1):
+                       world=None, inflation=1, reroute=True):
         """Local path along a global path (through any gates when None),
         repaired where the validator refuses it; ``inflation`` as the local
         planner's.
@@ -574,9 +586,9 @@ class Planner:
         and goal allow) in the validator; where it does not, the cells
         around the step where it dipped are blocked, in a box growing with
         each repair, and the stretch of the cell path around them planned
-        again (the whole path at the last repair, or when the stretch finds
-        no way round), a few times, before a path that keeps ``min_margin``
-        will do.
+        again (with ``reroute``; else, or when the stretch finds no way
+        round, the whole path), a few times, before a path that keeps
+        ``min_margin`` will do.
 
         Returns the validation, the legs and patches of the waypoints, and
         the patches the cell path crosses, in order.
@@ -595,7 +607,7 @@ class Planner:
             if termination():
                 raise PlanningTimeoutError("the time limit passed")
             try:
-                if stretch is not None and repair < self.retries.repairs:
+                if stretch is not None and reroute:
                     cell_path = _rerouted(search, *cell_path, stretch, blocked, path is None)
                 else:
                     cell_path = None
