@@ -204,3 +204,16 @@ def test_repairs_search_whole_paths_when_no_stretch_gives_a_valid_path(full_plan
         plan = full_planner.plan(start, goal)
         assert tried[-1] == (False, True) and (True, True) not in tried, k
         assert_executable(plan, goal_pose, full_planner.min_margin)
+
+
+# A pair of one patch whose inflated detour searches find only paths the
+# validator refuses; the least-cost round plans it.
+GREEDY_MISS = ((43.27761267988537, 45.527508787152, 28.629613572669253, -0.2801793811739981),
+               (39.79232574148059, 8.39996124933919, 36.800832888824715, -2.716917964617005))
+GREEDY_MISS_GOAL_POSE = (37.76231876952161, 12.54736900968225, -2.716917964617005)
+
+
+def test_a_pair_the_inflated_detour_misses_is_planned_by_least_cost_searches(full_planner):
+    start, goal = GREEDY_MISS
+    plan = full_planner.plan(start, goal)
+    assert_executable(plan, np.array(GREEDY_MISS_GOAL_POSE), full_planner.min_margin)

@@ -458,10 +458,12 @@ class Planner:
         """The first global path (:meth:`_attempts`) whose local path passes
         the validator, with that validation, legs and waypoint patches.
 
-        Repairs first search again only a stretch of the refused path; when
-        no global path passes that way, they are tried again searching whole
-        paths, which finds ways round that leave the stretch (seldom needed,
-        and several times the work).
+        Repairs first search again only a stretch of the refused path, and
+        the detour weight's searches inflate their estimate; when no global
+        path passes that way, they are all tried again with least-cost
+        searches of whole paths, which find ways round that leave the
+        stretch or that the greedier searches miss (seldom needed, and
+        several times the work).
 
         Raises
         ------
@@ -563,12 +565,14 @@ class Planner:
         """Local path along a global path that passes the validator, shortcut
         where the shortcut path passes too; when every repair of the
         shortest path fails, the same for the path the paper's clearance
-        weight keeps in the middle of its patches; ``reroute`` as
-        :meth:`_repaired_path`'s."""
+        weight keeps in the middle of its patches; with ``reroute``, repairs
+        search stretches and the detour's searches inflate their estimate
+        (:meth:`_repaired_path`), else every search is a least-cost one of
+        the whole path."""
         for weight, inflation in self._weights().items():
-            result, joints, patches, _ = self._repaired_path(path, s, g, clearance, weight,
-                                                             termination, most_settled, world,
-                                                             inflation, reroute)
+            result, joints, patches, _ = self._repaired_path(
+                path, s, g, clearance, weight, termination, most_settled, world,
+                inflation if reroute else 1, reroute)
             if result.ok:
                 break
         return result, joints, patches
