@@ -94,7 +94,7 @@ class Retries:
         path then costs at most this many times the least, and the search
         settles a fraction of the nodes, since the estimate of the weighted
         costs, from lengths alone, falls far below them; 1 gives least-cost
-        paths.
+        paths, as do the searches tried when no global path passes with it.
     """
 
     global_paths: int = 16
