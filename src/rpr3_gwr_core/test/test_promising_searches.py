@@ -13,7 +13,7 @@ from scipy.sparse.csgraph import dijkstra
 from rpr3_gwr_core import PAPER_GEOMETRY
 from rpr3_gwr_core.exceptions import InvalidInputError, PlanningTimeoutError
 from rpr3_gwr_core.paper import rho1_slice
-from rpr3_gwr_core.planning import Planner
+from rpr3_gwr_core.planning import Planner, planner as planner_module
 from rpr3_gwr_core.planning.index import LOW_MARGIN_FACTOR
 from rpr3_gwr_core.planning.planner import PlanOptions, Retries
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
@@ -174,7 +174,6 @@ def test_paths_kept_after_failed_repairs_pass_the_independent_continuation(
         assert_executable(plan, goal_pose, full_planner.min_margin)
 
 
-
 # Pairs drawn with seed 11 whose paths pass only after a repair.
 REPAIRED_PAIRS = (87, 163)
 
@@ -183,8 +182,6 @@ def test_repairs_search_whole_paths_when_no_stretch_gives_a_valid_path(full_plan
                                                                        monkeypatch):
     """Stretches that keep the refused path as it was (as where no way round
     is near) leave the second round, whose repairs search whole paths."""
-    from rpr3_gwr_core.planning import planner as planner_module
-
     pairs = same_aspect_pairs(random_full_configurations(
         np.random.default_rng(FALLBACK_SEED), 600))
     validated = Planner._validated_path
