@@ -18,8 +18,8 @@ from rpr3_gwr_core.planning.index import LOW_MARGIN_FACTOR
 from rpr3_gwr_core.planning.planner import PlanOptions, Retries
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
 
-from pose_reference import (assert_executable, legs_of, random_full_configurations,
-                            same_aspect_pairs)
+from pose_reference import (assert_executable, assert_within_limits, legs_of,
+                            random_full_configurations, same_aspect_pairs)
 
 D = math.radians
 # The paper's first example, an assembly-mode change and a short hop.
@@ -176,6 +176,8 @@ def test_paths_kept_after_failed_repairs_pass_the_independent_continuation(
 
 # Pairs drawn with seed 11 whose paths pass only after a repair.
 REPAIRED_PAIRS = (87, 163)
+# Joint limits the plans of the rounds after the first are timed with [/s, /s**2].
+LIMITS = (2.0, 5.0)
 
 
 def test_repairs_search_whole_paths_when_no_stretch_gives_a_valid_path(full_planner,
@@ -198,9 +200,11 @@ def test_repairs_search_whole_paths_when_no_stretch_gives_a_valid_path(full_plan
     for k in REPAIRED_PAIRS:
         (start, _), (goal, goal_pose) = pairs[k]
         tried.clear()
-        plan = full_planner.plan(start, goal)
+        plan = full_planner.plan(start, goal, PlanOptions(max_velocity=LIMITS[0],
+                                                          max_acceleration=LIMITS[1]))
         assert tried[-1] == (False, True) and (True, True) not in tried, k
         assert_executable(plan, goal_pose, full_planner.min_margin)
+        assert_within_limits(plan, *LIMITS)
 
 
 # A pair of one patch whose inflated detour searches find only paths the
@@ -212,5 +216,7 @@ GREEDY_MISS_GOAL_POSE = (37.76231876952161, 12.54736900968225, -2.71691796461700
 
 def test_a_pair_the_inflated_detour_misses_is_planned_by_least_cost_searches(full_planner):
     start, goal = GREEDY_MISS
-    plan = full_planner.plan(start, goal)
+    plan = full_planner.plan(start, goal, PlanOptions(max_velocity=LIMITS[0],
+                                                      max_acceleration=LIMITS[1]))
     assert_executable(plan, np.array(GREEDY_MISS_GOAL_POSE), full_planner.min_margin)
+    assert_within_limits(plan, *LIMITS)
