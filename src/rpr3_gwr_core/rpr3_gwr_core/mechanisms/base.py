@@ -12,7 +12,9 @@ is the scalar predictor-corrector step that sequential continuation (the
 validator, the driver) takes thousands of times, so implementations serve it
 from the same equations evaluated on floats.  A mechanism may also offer that
 step compiled (:attr:`Mechanism.step_kernel`), so the validator's whole loop
-runs outside the interpreter.
+runs outside the interpreter; every mechanism offers its predictor compiled
+(:attr:`Mechanism.predict_kernel`), so continuity screens the faces of a grid
+in one compiled loop.
 """
 
 import abc
@@ -20,6 +22,8 @@ import math
 import numbers
 
 import numba
+from numba import types
+from numba.core.types.function_type import CompileResultWAP
 import numpy as np
 
 from ..exceptions import InvalidInputError
@@ -27,7 +31,15 @@ from ..world.bodies import assemble_bodies
 from .continuation import STEP_KERNEL_SIGNATURE
 
 __all__ = ["Mechanism", "mechanism_from_dict", "register_mechanism", "STEP_KERNEL_SIGNATURE",
-           "positive_length", "finite_vectors"]
+           "PREDICT_KERNEL_SIGNATURE", "first_class", "positive_length", "finite_vectors"]
+
+# ``kernel(parameters, poses, joints_from, joints_to, out)``: the Euler
+# predictor of :meth:`Mechanism.predict` for the rows of ``poses`` (k,
+# pose_size), solutions of ``joints_from``, moved to ``joints_to``, written
+# to the rows of ``out`` (k, pose_size).
+PREDICT_KERNEL_SIGNATURE = types.void(types.float64[::1], types.float64[:, ::1],
+                                      types.float64[::1], types.float64[::1],
+                                      types.float64[:, ::1])
 
 _REGISTRY = {}
 
@@ -53,6 +65,18 @@ def mechanism_from_dict(data):
     if kind not in _REGISTRY:
         raise InvalidInputError(f"unknown mechanism kind {kind!r}; known: {sorted(_REGISTRY)}")
     return _REGISTRY[kind].from_dict(data)
+
+
+def first_class(dispatcher, signature):
+    """A numba function compiled for ``signature`` as a first-class function
+    that compiled loops take as an argument (:attr:`Mechanism.step_kernel`,
+    :attr:`Mechanism.predict_kernel`)."""
+    # Its address taken once: passing the dispatcher itself would look it up,
+    # under numba's compiler lock, at every call.
+    compiled = CompileResultWAP(dispatcher.overloads[signature.args])
+    # Typed once: numba would otherwise infer its type at every call.
+    compiled._numba_type_ = types.FunctionType(signature)
+    return compiled
 
 
 def positive_length(value, name):
@@ -159,6 +183,19 @@ class Mechanism(abc.ABC):
     def predict(self, poses, joints_from, joints_to):
         """Euler predictor: poses moved for a change of joints, shape of ``poses``."""
 
+    @property
+    @abc.abstractmethod
+    def predict_kernel(self):
+        """:meth:`predict` compiled by numba, for the solutions of one joint
+        vector at a time: what continuity's screen calls millions of times.
+
+        Returns
+        -------
+        (first-class function, ndarray)
+            A function compiled for :data:`PREDICT_KERNEL_SIGNATURE`
+            (:func:`first_class`) and the ``parameters`` array it takes.
+        """
+
     @abc.abstractmethod
     def correct(self, poses, joints, iterations):
         """Newton corrector on the constraint equations at fixed joints."""
@@ -186,7 +223,7 @@ class Mechanism(abc.ABC):
         -------
         (first-class function, ndarray) or None
             A function compiled for :data:`STEP_KERNEL_SIGNATURE` (a numba
-            dispatcher, or better its ``CompileResultWAP``) and the
+            dispatcher, or better :func:`first_class` of it) and the
             ``parameters`` array it takes; None (the default) makes the
             validator call :meth:`step` from the interpreter.
         """

@@ -30,14 +30,12 @@ import functools
 import math
 
 import numba
-from numba import types
-from numba.core.types.function_type import CompileResultWAP
 from numba.extending import register_jitable
 import numpy as np
 
 from ..exceptions import InvalidInputError, SingularityError
-from .base import (STEP_KERNEL_SIGNATURE, Mechanism, finite_vectors, positive_length,
-                   register_mechanism)
+from .base import (PREDICT_KERNEL_SIGNATURE, STEP_KERNEL_SIGNATURE, Mechanism, finite_vectors,
+                   first_class, positive_length, register_mechanism)
 
 __all__ = ["FiveBar", "DEFAULT_FIVE_BAR", "COINCIDENT_ELBOWS"]
 
@@ -259,12 +257,12 @@ class FiveBar(Mechanism):
 
     @functools.cached_property
     def step_kernel(self):
-        # Its address taken once: passing the dispatcher itself would look it
-        # up, under numba's compiler lock, at every call.
-        compiled = CompileResultWAP(_step_kernel.overloads[STEP_KERNEL_SIGNATURE.args])
-        # Typed once: numba would otherwise infer its type at every call.
-        compiled._numba_type_ = types.FunctionType(STEP_KERNEL_SIGNATURE)
-        return compiled, np.array([*self.parameters, self.scale])
+        return (first_class(_step_kernel, STEP_KERNEL_SIGNATURE),
+                np.array([*self.parameters, self.scale]))
+
+    @functools.cached_property
+    def predict_kernel(self):
+        return first_class(_predict_kernel, PREDICT_KERNEL_SIGNATURE), np.array(self.parameters)
 
 
 # A commercial five-bar's proportions, so that the roadmap meets what a real
@@ -383,3 +381,21 @@ def _step_kernel(parameters, pose, joints_from, joints_to):
         return np.nan
     pose[0], pose[1] = x, y
     return margin
+
+
+@numba.njit(PREDICT_KERNEL_SIGNATURE, cache=True, nogil=True)
+def _predict_kernel(parameters, poses, joints_from, joints_to, out):
+    """:meth:`FiveBar.predict` of the solutions of one joint vector, as
+    :data:`~.base.PREDICT_KERNEL_SIGNATURE` takes it; ``parameters`` are
+    :attr:`FiveBar.parameters`."""
+    geometry = (parameters[0], parameters[1], parameters[2])
+    a1, a2 = joints_from[0], joints_from[1]
+    dq1, dq2 = joints_to[0] - a1, joints_to[1] - a2
+    for r in range(poses.shape[0]):
+        u1x, u1y, u2x, u2y, w1, w2 = _rows(poses[r, 0], poses[r, 1], a1, a2, geometry)
+        r1, r2 = w1 * dq1, w2 * dq2
+        det = u1x * u2y - u1y * u2x
+        # A singular system leaves the pose, as _solve_rows does.
+        inv = 1.0 / det if det != 0.0 else 0.0
+        out[r, 0] = poses[r, 0] + (u2y * r1 - u1y * r2) * inv
+        out[r, 1] = poses[r, 1] + (u1x * r2 - u2x * r1) * inv

@@ -46,13 +46,12 @@ import math
 import numbers
 
 import numba
-from numba import types
-from numba.core.types.function_type import CompileResultWAP
 from numba.extending import register_jitable
 import numpy as np
 
 from ..exceptions import InvalidInputError
-from .base import STEP_KERNEL_SIGNATURE, Mechanism, register_mechanism
+from .base import (PREDICT_KERNEL_SIGNATURE, STEP_KERNEL_SIGNATURE, Mechanism, first_class,
+                   register_mechanism)
 from .trig_roots import sampled_roots
 
 __all__ = [
@@ -397,12 +396,12 @@ class ThreeRPR(Mechanism):
 
     @functools.cached_property
     def step_kernel(self):
-        # Its address taken once: passing the dispatcher itself would look it
-        # up, under numba's compiler lock, at every call.
-        compiled = CompileResultWAP(_step_kernel.overloads[STEP_KERNEL_SIGNATURE.args])
-        # Typed once: numba would otherwise infer its type at every call.
-        compiled._numba_type_ = types.FunctionType(STEP_KERNEL_SIGNATURE)
-        return compiled, np.array([*self.parameters, self.scale])
+        return (first_class(_step_kernel, STEP_KERNEL_SIGNATURE),
+                np.array([*self.parameters, self.scale]))
+
+    @functools.cached_property
+    def predict_kernel(self):
+        return first_class(_predict_kernel, PREDICT_KERNEL_SIGNATURE), np.array(self.parameters)
 
     def refine_cusp(self, pose, fixed):
         if set(fixed) != {0}:
@@ -677,6 +676,24 @@ def _step_kernel(parameters, pose, joints_from, joints_to):
         return np.nan
     pose[0], pose[1], pose[2] = x, y, alpha
     return margin
+
+
+@numba.njit(PREDICT_KERNEL_SIGNATURE, cache=True, nogil=True)
+def _predict_kernel(parameters, poses, joints_from, joints_to, out):
+    """:func:`_predict` of the solutions of one leg configuration, as
+    :data:`~.base.PREDICT_KERNEL_SIGNATURE` takes it; ``parameters`` are
+    :attr:`ThreeRPR.parameters`."""
+    p = parameters
+    geometry = (p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8])
+    r1, r2, r3 = joints_from[0], joints_from[1], joints_from[2]
+    change = (r1 * (joints_to[0] - r1), r2 * (joints_to[1] - r2), r3 * (joints_to[2] - r3))
+    for r in range(poses.shape[0]):
+        rows = _row_terms(poses[r, 0], poses[r, 1], poses[r, 2], geometry)
+        (dx, dy, da), det = _adjugate_product(rows, *change)
+        # A singular system leaves the pose, as _solve_rows does.
+        inv = 1.0 / det if det != 0.0 else 0.0
+        out[r, 0], out[r, 1] = poses[r, 0] + dx * inv, poses[r, 1] + dy * inv
+        out[r, 2] = poses[r, 2] + da * inv
 
 
 # --- cusps of the slices at fixed rho1 ----------------------------------------------

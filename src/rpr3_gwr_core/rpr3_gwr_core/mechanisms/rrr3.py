@@ -32,14 +32,12 @@ import functools
 import math
 
 import numba
-from numba import types
-from numba.core.types.function_type import CompileResultWAP
 from numba.extending import register_jitable
 import numpy as np
 
 from ..exceptions import InvalidInputError
-from .base import (STEP_KERNEL_SIGNATURE, Mechanism, finite_vectors, positive_length,
-                   register_mechanism)
+from .base import (PREDICT_KERNEL_SIGNATURE, STEP_KERNEL_SIGNATURE, Mechanism, finite_vectors,
+                   first_class, positive_length, register_mechanism)
 from .rpr3 import (
     MAX_SOLUTIONS,
     ThreeRPR,
@@ -299,12 +297,11 @@ class _MovingBaseRPR(Mechanism):
 
     @functools.cached_property
     def step_kernel(self):
-        # Its address taken once: passing the dispatcher itself would look it
-        # up, under numba's compiler lock, at every call.
-        compiled = CompileResultWAP(_step_kernel.overloads[STEP_KERNEL_SIGNATURE.args])
-        # Typed once: numba would otherwise infer its type at every call.
-        compiled._numba_type_ = types.FunctionType(STEP_KERNEL_SIGNATURE)
-        return compiled, np.array(self.parameters)
+        return first_class(_step_kernel, STEP_KERNEL_SIGNATURE), np.array(self.parameters)
+
+    @functools.cached_property
+    def predict_kernel(self):
+        return first_class(_predict_kernel, PREDICT_KERNEL_SIGNATURE), np.array(self.parameters)
 
 
 def _batch(*arrays):
@@ -332,6 +329,13 @@ def _rows(shape, *arrays):
 # scales with the batch.  ``geometry`` is :attr:`_MovingBaseRPR.parameters`;
 # a batch kernel types ``base`` with ``geometry[:9]`` before its loop, and
 # :func:`_row_rpr` replaces it at the first row.
+
+@register_jitable
+def _geometry_tuple(p):
+    """:attr:`_MovingBaseRPR.parameters` from their array, as the kernels take them."""
+    return (p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12],
+            p[13], p[14], p[15], p[16], p[17], p[18])
+
 
 @register_jitable
 def _moving_rpr(geometry, q1, q2, q3):
@@ -465,6 +469,27 @@ def _pose_gap(x, y, alpha, x2, y2, alpha2, scale):
     return math.sqrt((x - x2) ** 2 + (y - y2) ** 2 + (turn * scale) ** 2)
 
 
+@register_jitable
+def _euler(geometry, base, x, y, alpha, changes):
+    """The Euler step of the pose ``(x, y, alpha)`` for the joint changes
+    ``changes`` (:func:`_joint_change`), its 3-RPR parameters ``base``
+    (:func:`_moving_rpr` of the joints it starts from)."""
+    rows = _row_terms(x, y, alpha, base)
+    v1, v2, v3 = _joint_rates(geometry, rows, base)
+    (dx, dy, da), det = _adjugate_product(rows, v1 * changes[0], v2 * changes[1],
+                                          v3 * changes[2])
+    # A singular system leaves the pose, as the 3-RPR's _solve_rows does.
+    inv = 1.0 / det if det != 0.0 else 0.0
+    return x + dx * inv, y + dy * inv, alpha + da * inv
+
+
+@register_jitable
+def _joint_changes(geometry, start, end):
+    """:func:`_joint_change` of each of three joints (arrays of shape (3,))."""
+    return (_joint_change(geometry, start[0], end[0]), _joint_change(geometry, start[1], end[1]),
+            _joint_change(geometry, start[2], end[2]))
+
+
 @numba.njit(cache=True, nogil=True)
 def _moving_euler(poses, joints_from, joints_to, geometry):
     """:meth:`_MovingBaseRPR.predict` of poses (n, 3) from joints (n, 3) to
@@ -473,17 +498,23 @@ def _moving_euler(poses, joints_from, joints_to, geometry):
     base = geometry[:9]
     for r in range(poses.shape[0]):
         base = _row_rpr(geometry, joints_from, r, base)
-        rows = _row_terms(poses[r, 0], poses[r, 1], poses[r, 2], base)
-        v1, v2, v3 = _joint_rates(geometry, rows, base)
-        (dx, dy, da), det = _adjugate_product(
-            rows, v1 * _joint_change(geometry, joints_from[r, 0], joints_to[r, 0]),
-            v2 * _joint_change(geometry, joints_from[r, 1], joints_to[r, 1]),
-            v3 * _joint_change(geometry, joints_from[r, 2], joints_to[r, 2]))
-        # A singular system leaves the pose, as the 3-RPR's _solve_rows does.
-        inv = 1.0 / det if det != 0.0 else 0.0
-        out[r, 0], out[r, 1] = poses[r, 0] + dx * inv, poses[r, 1] + dy * inv
-        out[r, 2] = poses[r, 2] + da * inv
+        out[r, 0], out[r, 1], out[r, 2] = _euler(
+            geometry, base, poses[r, 0], poses[r, 1], poses[r, 2],
+            _joint_changes(geometry, joints_from[r], joints_to[r]))
     return out
+
+
+@numba.njit(PREDICT_KERNEL_SIGNATURE, cache=True, nogil=True)
+def _predict_kernel(parameters, poses, joints_from, joints_to, out):
+    """:func:`_moving_euler` of the solutions of one joint vector, as
+    :data:`~.base.PREDICT_KERNEL_SIGNATURE` takes it; ``parameters`` are
+    :attr:`_MovingBaseRPR.parameters`."""
+    geometry = _geometry_tuple(parameters)
+    base = _moving_rpr(geometry, joints_from[0], joints_from[1], joints_from[2])
+    changes = _joint_changes(geometry, joints_from, joints_to)
+    for r in range(poses.shape[0]):
+        out[r, 0], out[r, 1], out[r, 2] = _euler(geometry, base, poses[r, 0], poses[r, 1],
+                                                 poses[r, 2], changes)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -557,12 +588,9 @@ def _compiled_step(geometry, x, y, alpha, a1, a2, a3, b1, b2, b3):
 def _step_kernel(parameters, pose, joints_from, joints_to):
     """:func:`_compiled_step` as :data:`~.base.STEP_KERNEL_SIGNATURE` takes
     it; ``parameters`` are :attr:`_MovingBaseRPR.parameters`."""
-    p = parameters
     ok, x, y, alpha, margin = _compiled_step(
-        (p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12],
-         p[13], p[14], p[15], p[16], p[17], p[18]),
-        pose[0], pose[1], pose[2], joints_from[0], joints_from[1], joints_from[2],
-        joints_to[0], joints_to[1], joints_to[2])
+        _geometry_tuple(parameters), pose[0], pose[1], pose[2], joints_from[0],
+        joints_from[1], joints_from[2], joints_to[0], joints_to[1], joints_to[2])
     if not ok:
         return np.nan
     pose[0], pose[1], pose[2] = x, y, alpha

@@ -10,9 +10,18 @@ of the neighbour with the same aspect.  A link is kept only when the
 continuation works in both directions and the two directions agree, so the
 relation is a partial bijection and gates come out symmetric.
 
+Most faces are far from any fold, and there the links are the identity on
+the ordered solutions: a compiled screen settles them first, with one Euler
+prediction per solution and direction (the mechanism's
+:attr:`~rpr3_gwr_core.mechanisms.base.Mechanism.predict_kernel`), and only
+the faces it leaves unsure are tracked.
+
 """
 
+import numba
 import numpy as np
+
+from ..mechanisms.base import _distance
 
 
 __all__ = ["neighbour_pairs", "match_solutions"]
@@ -100,8 +109,8 @@ def match_solutions(field, lower, upper, screen=True):
     lower, upper : ndarray of int, shape (n,)
         Flat indices of adjacent cells.
     screen : bool
-        Settle the unambiguous faces with the screening test (module doc)
-        and track only the others; the links are the same.
+        Settle the unambiguous faces with the screen (module doc) and track
+        only the others; the links are the same.
 
     Returns
     -------
@@ -112,12 +121,8 @@ def match_solutions(field, lower, upper, screen=True):
     joints = field.grid.joints()
     lower, upper = np.asarray(lower), np.asarray(upper)
     match = np.full((len(lower), field.max_solutions), -1, dtype=np.int8)
-    # Faces are independent: chunks bound the temporaries, which scale with faces.
     if screen:
-        settled = np.zeros(len(lower), dtype=bool)
-        for start in range(0, len(lower), _CHUNK):
-            part = slice(start, start + _CHUNK)
-            settled[part] = _screened(field, joints, lower[part], upper[part])
+        settled = _screened(field, joints, lower, upper)
         match[settled] = np.where(field.valid[lower[settled]], np.arange(field.max_solutions),
                                   -1)
         todo = np.flatnonzero(~settled)
@@ -126,6 +131,7 @@ def match_solutions(field, lower, upper, screen=True):
     # A link needs a solution at both ends; the faces left are tracked
     # together, so the few solutions that need substeps take few calls.
     todo = todo[(field.count[lower[todo]] > 0) & (field.count[upper[todo]] > 0)]
+    # Chunks bound the tracking's temporaries, which scale with faces.
     for start in range(0, todo.size, _CHUNK):
         part = todo[start:start + _CHUNK]
         match[part] = _track_both_ways(field, joints, lower[part], upper[part])
@@ -144,27 +150,54 @@ def _track_both_ways(field, joints, lower, upper):
 def _screened(field, joints, lower, upper):
     """Faces whose links are surely the identity on the ordered solutions."""
     mechanism = field.mechanism
-    scale = mechanism.scale
-    same = np.flatnonzero((field.count[lower] == field.count[upper]) & (field.count[lower] > 0))
-    rows, slots = np.nonzero(field.valid[lower[same]])
-    # Each end's cells, joints and poses serve as source in one direction and
-    # as target in the other: gathered once, the temporaries are halved (and
-    # np.take gathers rows in a third of a fancy index's time).
-    width = field.max_solutions
-    poses = field.poses.reshape(-1, field.poses.shape[-1])
-    ends = [(cells * width + slots, np.take(joints, cells, axis=0))
-            for cells in (lower[same][rows], upper[same][rows])]
-    ends = [(disks, end_joints, np.take(poses, disks, axis=0)) for disks, end_joints in ends]
-    margin, separation = field.margin.ravel(), field.separation.ravel()
-    bad = np.sign(np.take(margin, ends[0][0])) != np.sign(np.take(margin, ends[1][0]))
-    for (_, src_joints, src_poses), (dst, dst_joints, dst_poses) in (ends, ends[::-1]):
-        pose = mechanism.predict(src_poses, src_joints,
-                                 field.grid.nearest_joints(src_joints, dst_joints))
-        err = mechanism.pose_distance(dst_poses, pose) / scale
-        gap = np.take(separation, dst) / scale
-        bad |= ~(err < _SCREEN_TOL) | ~(gap > _SCREEN_RATIO * err)
-    unsure = np.zeros(same.size, dtype=bool)
-    unsure[rows[bad]] = True
-    settled = np.zeros(len(lower), dtype=bool)
-    settled[same[~unsure]] = True
+    kernel, parameters = mechanism.predict_kernel
+    periods = np.zeros(mechanism.n_joints)
+    for axis in field.grid.axes:
+        periods[axis.joint] = axis.period
+    solutions = (field.count, field.poses, field.margin, field.separation)
+    metric = (np.array(mechanism.angular, dtype=np.bool_), float(mechanism.scale))
+    faces = (np.ascontiguousarray(lower, dtype=np.int64),
+             np.ascontiguousarray(upper, dtype=np.int64))
+    return _screen(kernel, parameters, faces, solutions, (joints, periods), metric)
+
+
+@numba.njit(cache=True, nogil=True)
+def _screen(predict, parameters, faces, solutions, space, metric):
+    """:func:`_screened`'s loop: a face is settled when its cells have as many
+    solutions, slot by slot of one aspect, and each solution, predicted
+    across the face in either direction, lands within ``_SCREEN_TOL`` of the
+    same slot and far nearer it than any other solution of that cell."""
+    lower, upper = faces
+    joints, periods = space
+    count, poses, margin, separation = solutions
+    angular, scale = metric
+    settled = np.zeros(lower.size, dtype=np.bool_)
+    predicted = np.empty(poses.shape[1:])
+    target = np.empty(joints.shape[1])
+    for k in range(lower.size):
+        n = count[lower[k]]
+        if n == 0 or count[upper[k]] != n:
+            continue
+        sure = True
+        for slot in range(n):
+            # np.sign's comparison: a NaN margin settles nothing.
+            if not np.sign(margin[lower[k], slot]) == np.sign(margin[upper[k], slot]):
+                sure = False
+        for source, destination in ((lower[k], upper[k]), (upper[k], lower[k])):
+            if not sure:
+                break
+            # Across a periodic axis' seam the move is one step, not a turn back.
+            for j in range(target.size):
+                target[j] = joints[destination, j]
+                if periods[j] > 0:
+                    target[j] -= periods[j] * np.round(
+                        (target[j] - joints[source, j]) / periods[j])
+            predict(parameters, poses[source, :n], joints[source], target, predicted[:n])
+            for slot in range(n):
+                err = _distance(poses[destination, slot], predicted[slot], angular, scale) / scale
+                gap = separation[destination, slot] / scale
+                if not (err < _SCREEN_TOL and gap > _SCREEN_RATIO * err):
+                    sure = False
+                    break
+        settled[k] = sure
     return settled
