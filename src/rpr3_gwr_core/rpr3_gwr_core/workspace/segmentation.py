@@ -502,15 +502,9 @@ def segment(field, method="components", min_region_cells=8, *, progress=None, wo
 
 def _regions(field, links, min_cells):
     n = field.grid.size
-    count = field.count.astype(int)
-    rows, cols = [], []
-    for lo, up, match in links:
-        full = (count[lo] == count[up]) & (count[lo] > 0) & (
-            (match >= 0).sum(axis=1) == count[lo])
-        rows.append(lo[full])
-        cols.append(up[full])
-    label = connected_labels(n, zip(rows, cols))
-    occupied = count > 0
+    label = connected_labels(n, (_full_faces(lo, up, match, field.count)
+                                 for lo, up, match in links))
+    occupied = field.count > 0
     sizes = np.bincount(label[occupied], minlength=label.max() + 1)
     volumes = np.bincount(label[occupied], weights=field.grid.cell_volumes()[occupied],
                           minlength=sizes.size)
@@ -521,6 +515,22 @@ def _regions(field, links, min_cells):
     renumber = np.zeros(sizes.size, dtype=np.int32)
     renumber[kept] = np.arange(1, kept.size + 1)
     return np.where(occupied, renumber[label], 0).astype(np.int32)
+
+
+@numba.njit(cache=True, nogil=True)
+def _full_faces(lower, upper, match, count):
+    """The faces, ``(lower, upper)`` cells, between two cells of as many
+    solutions, every one of which continues across: the faces inside regions."""
+    keep = np.zeros(lower.size, dtype=np.bool_)
+    for k in range(lower.size):
+        n = count[lower[k]]
+        if n == 0 or count[upper[k]] != n:
+            continue
+        linked = 0
+        for i in range(match.shape[1]):
+            linked += match[k, i] >= 0
+        keep[k] = linked == n
+    return lower[keep], upper[keep]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -552,12 +562,18 @@ def linked_solutions(lower, upper, match):
 
 def _within_region_links(field, region, linked):
     """Per axis, the (lower, upper) disks linked inside one region."""
-    out = []
-    n = field.max_solutions
-    for a, b in linked:
-        same = (region[a // n] == region[b // n]) & (region[a // n] > 0)
-        out.append((a[same], b[same]))
-    return out
+    return [_inside_regions(a, b, region, field.max_solutions) for a, b in linked]
+
+
+@numba.njit(cache=True, nogil=True)
+def _inside_regions(lower, upper, region, width):
+    """The links of disks ``lower[k]`` and ``upper[k]`` (``cell * width +
+    slot``) whose cells are of one region."""
+    keep = np.empty(lower.size, dtype=np.bool_)
+    for k in range(lower.size):
+        r = region[lower[k] // width]
+        keep[k] = r > 0 and r == region[upper[k] // width]
+    return lower[keep], upper[keep]
 
 
 def _components_by_rds(valid, disk_links, dimension):
@@ -575,32 +591,50 @@ def _components_by_rds(valid, disk_links, dimension):
 
 def _number_patches(field, region, component, disk_links):
     """Patch id of every disk from its component label (rule in module doc)."""
-    n_cells = field.grid.size
-    component = component.reshape(n_cells, field.max_solutions)
+    component = component.reshape(field.grid.size, field.max_solutions)
     aspect = field.aspect
     base = _id_base(field)
+    first, sheets = _region_sheets(region, component)
     # Component labels of the regions' disks are distinct (links stay inside
     # a region), so one table from label to patch id numbers every disk.
     patch_of_label = {}
-    by_region = np.argsort(region, kind="stable")
-    bounds = np.searchsorted(region[by_region], np.arange(1, int(region.max(initial=0)) + 2))
-    for r in range(1, int(region.max(initial=0)) + 1):
-        cells = by_region[bounds[r - 1]:bounds[r]]
-        labels = np.unique(component[cells][component[cells] >= 0])
-        reference = cells[0]
-        if labels.size < field.count[reference]:
-            component = _cut_sheets(field, cells, component, disk_links)
-            labels = np.unique(component[cells][component[cells] >= 0])
-        keys = []
-        for label in labels:
-            slots = np.flatnonzero(component[reference] == label)
-            keys.append((aspect[reference, slots[0]], slots[0]))
-        order = sorted(range(len(labels)), key=lambda k: keys[k])
-        for layer, k in enumerate(order, start=1):
-            patch_of_label[int(labels[k])] = base * r + layer
+    for r in range(1, first.size):
+        reference = first[r]
+        if sheets[r] < field.count[reference]:
+            component = _cut_sheets(field, np.flatnonzero(region == r), component, disk_links)
+        # Every sheet of a region covers each of its cells, the first one too:
+        # a sheet is known there by its first slot.
+        slot_of_label = {}
+        for slot in range(field.count[reference]):
+            slot_of_label.setdefault(int(component[reference, slot]), slot)
+        order = sorted(slot_of_label, key=lambda label: (aspect[reference, slot_of_label[label]],
+                                                          slot_of_label[label]))
+        for layer, label in enumerate(order, start=1):
+            patch_of_label[label] = base * r + layer
     table = np.zeros(int(component.max(initial=-1)) + 2, dtype=np.int32)
     table[np.fromiter(patch_of_label, dtype=np.int64) + 1] = list(patch_of_label.values())
     return table[component + 1]
+
+
+@numba.njit(cache=True, nogil=True)
+def _region_sheets(region, component):
+    """Each region's first cell and number of distinct component labels
+    (sheets) among its disks, indexed by region (entry 0 unused)."""
+    first = np.full(region.max() + 1, -1, dtype=np.int64)
+    sheets = np.zeros(first.size, dtype=np.int64)
+    seen = np.zeros(component.max() + 1, dtype=np.bool_)
+    for cell in range(region.size):
+        r = region[cell]
+        if r == 0:
+            continue
+        if first[r] < 0:
+            first[r] = cell
+        for slot in range(component.shape[1]):
+            label = component[cell, slot]
+            if label >= 0 and not seen[label]:
+                seen[label] = True
+                sheets[r] += 1
+    return first, sheets
 
 
 def _id_base(field):
