@@ -730,30 +730,45 @@ def _tally_axis(lower, upper, match, patch, faces, continued, on_gate):
     ``continued`` and mark ``on_gate`` those between two patches; returns
     these crossings, face by face, slot by slot, as rows ``(face, lower cell,
     upper cell, lower patch, upper patch)``."""
-    out = np.empty((1024, 5), dtype=np.int64)
-    used = 0
+    crossings = 0
     for k in range(match.shape[0]):
         lo, up = lower[k], upper[k]
         faces[lo] += 1
         faces[up] += 1
         for i in range(match.shape[1]):
-            j = match[k, i]
-            if j < 0 or patch[lo, i] <= 0 or patch[up, j] <= 0:
+            j, a, b = _patch_link(match, patch, lo, up, k, i)
+            if j < 0:
                 continue
             continued[lo, i] += 1
             continued[up, j] += 1
-            if patch[lo, i] == patch[up, j]:
-                continue
-            on_gate[lo, i] = True
-            on_gate[up, j] = True
-            if used == out.shape[0]:
-                grown = np.empty((2 * used, 5), dtype=np.int64)
-                grown[:used] = out
-                out = grown
-            out[used, 0], out[used, 1], out[used, 2] = k, lo, up
-            out[used, 3], out[used, 4] = patch[lo, i], patch[up, j]
-            used += 1
-    return out[:used].copy()
+            if a != b:
+                on_gate[lo, i] = True
+                on_gate[up, j] = True
+                crossings += 1
+    # Counted first and then written: an array that grew inside the loop
+    # would cost its references at every step.
+    out = np.empty((crossings, 5), dtype=np.int64)
+    used = 0
+    for k in range(match.shape[0]):
+        lo, up = lower[k], upper[k]
+        for i in range(match.shape[1]):
+            j, a, b = _patch_link(match, patch, lo, up, k, i)
+            if j >= 0 and a != b:
+                out[used, 0], out[used, 1], out[used, 2] = k, lo, up
+                out[used, 3], out[used, 4] = a, b
+                used += 1
+    return out
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _patch_link(match, patch, lo, up, k, i):
+    """``(j, a, b)``: the slot j that solution i of cell ``lo`` continues into
+    across face k, and the patches a and b of the two; j is -1 unless both
+    are patch solutions."""
+    j = match[k, i]
+    if j < 0 or patch[lo, i] <= 0 or patch[up, j] <= 0:
+        return -1, 0, 0
+    return j, patch[lo, i], patch[up, j]
 
 
 @numba.njit(cache=True, nogil=True)
