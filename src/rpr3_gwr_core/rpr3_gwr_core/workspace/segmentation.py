@@ -463,10 +463,11 @@ def segment(field, method="components", min_region_cells=8, *, progress=None, wo
 
     workers : callable, optional
         A map-like callable, ``workers(function, iterable)`` yielding the
-        results in order, such as ``ThreadPoolExecutor.map``: the solutions are matched across
-        the faces of each axis with it, the axes in parallel with a thread
-        pool's (numpy releases the interpreter's lock).  The
-        default, the builtin ``map``, works in the calling thread.
+        results in order, such as ``ThreadPoolExecutor.map``: the solutions are
+        matched across the faces of each axis, and the links inside regions
+        picked, with it, the axes in parallel with a thread pool's (numpy and
+        the compiled loops release the interpreter's lock).  The default, the
+        builtin ``map``, works in the calling thread.
 
     Returns
     -------
@@ -478,14 +479,17 @@ def segment(field, method="components", min_region_cells=8, *, progress=None, wo
         raise InvalidInputError("min_region_cells must be at least 1")
     report = part(progress)
     report("continuity across faces", 0.0)
-    pairs = field.grid.pairs()
-    matches = list(workers(lambda pair: match_solutions(field, *pair), pairs))
-    links = [(lo, up, match) for (lo, up), match in zip(pairs, matches)]
+
+    def match_axis(pair):
+        match = match_solutions(field, *pair)
+        # What the later stages take of each axis is taken here, the axes in parallel.
+        return match, linked_solutions(*pair, match), _full_faces(*pair, match, field.count)
+
+    matches, linked, full_faces = zip(*workers(match_axis, field.grid.pairs()))
     report("regions", 0.7)
-    region = _regions(field, links, int(min_region_cells))
+    region = _regions(field, full_faces, int(min_region_cells))
     report("patches", 0.75)
-    linked = [linked_solutions(lo, up, match) for lo, up, match in links]
-    disk_links = _within_region_links(field, region, linked)
+    disk_links = _within_region_links(field, region, linked, workers)
     n_disks = field.grid.size * field.max_solutions
     valid = (field.valid & (region[:, None] > 0)).ravel()
     if method == "rds":
@@ -495,15 +499,16 @@ def segment(field, method="components", min_region_cells=8, *, progress=None, wo
     patch = _absorb_unresolved(field, region,
                                _number_patches(field, region, component, disk_links), linked)
     report("gates and singular boundaries", 0.9)
-    segmentation = Segmentation.from_arrays(field, region, patch, [m for _, _, m in links])
+    segmentation = Segmentation.from_arrays(field, region, patch, list(matches))
     report("gates and singular boundaries", 1.0)
     return segmentation
 
 
-def _regions(field, links, min_cells):
+def _regions(field, full_faces, min_cells):
+    """Region of every cell from the faces inside regions (:func:`_full_faces`
+    of each axis)."""
     n = field.grid.size
-    label = connected_labels(n, (_full_faces(lo, up, match, field.count)
-                                 for lo, up, match in links))
+    label = connected_labels(n, full_faces)
     occupied = field.count > 0
     sizes = np.bincount(label[occupied], minlength=label.max() + 1)
     volumes = np.bincount(label[occupied], weights=field.grid.cell_volumes()[occupied],
@@ -560,9 +565,10 @@ def linked_solutions(lower, upper, match):
     return a, b
 
 
-def _within_region_links(field, region, linked):
+def _within_region_links(field, region, linked, workers=map):
     """Per axis, the (lower, upper) disks linked inside one region."""
-    return [_inside_regions(a, b, region, field.max_solutions) for a, b in linked]
+    return list(workers(lambda pair: _inside_regions(*pair, region, field.max_solutions),
+                        linked))
 
 
 @numba.njit(cache=True, nogil=True)
