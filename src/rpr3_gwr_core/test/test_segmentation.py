@@ -464,7 +464,8 @@ def test_patch_numbering_matches_the_whole_array_assignment(cases):
     disk_links = segmentation._within_region_links(field, seg.region, linked)
     valid = (field.valid & (seg.region[:, None] > 0)).ravel()
     component = np.where(valid, connected_labels(valid.size, disk_links), -1)
-    got = segmentation._number_patches(field, seg.region, component, disk_links)
+    full_faces = [segmentation._full_faces(lo, up, m, field.count) for lo, up, m in seg.links]
+    got = segmentation._number_patches(field, seg.region, component, disk_links, full_faces)
     component = component.reshape(got.shape)
     expected = np.zeros(got.shape, dtype=np.int32)
     for r in range(1, seg.n_regions + 1):

@@ -496,8 +496,8 @@ def segment(field, method="components", min_region_cells=8, *, progress=None, wo
         component = _components_by_rds(valid, disk_links, field.grid.ndim)
     else:
         component = np.where(valid, connected_labels(n_disks, disk_links), -1)
-    patch = _absorb_unresolved(field, region,
-                               _number_patches(field, region, component, disk_links), linked)
+    patch = _absorb_unresolved(
+        field, region, _number_patches(field, region, component, disk_links, full_faces), linked)
     report("gates and singular boundaries", 0.9)
     segmentation = Segmentation.from_arrays(field, region, patch, list(matches))
     report("gates and singular boundaries", 1.0)
@@ -595,7 +595,7 @@ def _components_by_rds(valid, disk_links, dimension):
     return component
 
 
-def _number_patches(field, region, component, disk_links):
+def _number_patches(field, region, component, disk_links, full_faces):
     """Patch id of every disk from its component label (rule in module doc)."""
     component = component.reshape(field.grid.size, field.max_solutions)
     aspect = field.aspect
@@ -607,7 +607,8 @@ def _number_patches(field, region, component, disk_links):
     for r in range(1, first.size):
         reference = first[r]
         if sheets[r] < field.count[reference]:
-            component = _cut_sheets(field, np.flatnonzero(region == r), component, disk_links)
+            component = _cut_sheets(field, np.flatnonzero(region == r), component, disk_links,
+                                    full_faces)
         # Every sheet of a region covers each of its cells, the first one too:
         # a sheet is known there by its first slot.
         slot_of_label = {}
@@ -648,36 +649,42 @@ def _id_base(field):
     return 10 ** len(str(field.max_solutions))
 
 
-def _cut_sheets(field, cells, component, disk_links):
+def _cut_sheets(field, cells, component, disk_links, full_faces):
     """Relabel the disks of a region whose sheets do not come back to
     themselves around a loop (rule in module doc): one label per disk of its
     first cell, carried along a breadth-first tree of its cells."""
     n = field.max_solutions
-    member = np.zeros(field.grid.size, dtype=bool)
-    member[cells] = True
-    lower = np.concatenate([lo for lo, _ in disk_links])
-    upper = np.concatenate([up for _, up in disk_links])
-    inside = member[lower // n]
-    lower, upper = lower[inside], upper[inside]
     size = field.grid.size
-    lower_cell, upper_cell = lower // n, upper // n
-    keys = np.minimum(lower_cell, upper_cell) * size + np.maximum(lower_cell, upper_cell)
+    member = np.zeros(size, dtype=bool)
+    member[cells] = True
     # The tree follows faces across which every solution continues (those
     # that make the region), so each of its edges carries every label.
-    pair_keys, links_per_pair = np.unique(keys, return_counts=True)
-    full = pair_keys[links_per_pair == field.count[pair_keys // size]]
-    cell_graph = sparse.coo_matrix((np.ones(full.size, dtype=np.int8),
-                                    (full // size, full % size)), shape=(size, size)).tocsr()
+    lower, upper = (np.concatenate(side) for side in zip(*full_faces))
+    inside = member[lower]
+    lower, upper = lower[inside], upper[inside]
+    cell_graph = sparse.coo_matrix((np.ones(lower.size, dtype=np.int8),
+                                    (np.minimum(lower, upper), np.maximum(lower, upper))),
+                                   shape=(size, size)).tocsr()
     _, parent = breadth_first_order(cell_graph, int(cells[0]), directed=False)
-    # A face is on the tree when one of its cells is the other's parent.
-    on_tree = (parent[lower_cell] == upper_cell) | (parent[upper_cell] == lower_cell)
-    label = connected_labels(size * n, [(lower[on_tree], upper[on_tree])])
+    label = connected_labels(size * n, [_tree_links(a, b, parent, n) for a, b in disk_links])
     out = component.copy()
     disks = (cells[:, None] * n + np.arange(n)).ravel()
     valid = field.valid[cells].ravel()
     # Fresh labels, past every label in use, so no other region's sheet is met.
     out.ravel()[disks[valid]] = component.max() + 1 + label[disks[valid]]
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _tree_links(lower, upper, parent, width):
+    """The links of disks ``lower[k]`` and ``upper[k]`` (``cell * width +
+    slot``) across a face of a tree of cells, ``parent`` each cell's parent
+    (no cell's outside the tree)."""
+    keep = np.empty(lower.size, dtype=np.bool_)
+    for k in range(lower.size):
+        a, b = lower[k] // width, upper[k] // width
+        keep[k] = parent[a] == b or parent[b] == a
+    return lower[keep], upper[keep]
 
 
 def _absorb_unresolved(field, region, patch, linked):
