@@ -693,8 +693,9 @@ def _absorb_unresolved(field, region, patch, linked):
     if not unresolved.any():
         return patch
     n = field.max_solutions
-    a = np.concatenate([a for a, _ in linked])
-    b = np.concatenate([b for _, b in linked])
+    # The few links that touch them, of the millions.
+    a, b = (np.concatenate(side) for side in zip(*(_touching(lower, upper, unresolved)
+                                                    for lower, upper in linked)))
     inner = unresolved[a] & unresolved[b]
     label = connected_labels(patch.size, [(a[inner], b[inner])])
     edge = unresolved[a] != unresolved[b]
@@ -722,6 +723,15 @@ def _absorb_unresolved(field, region, patch, linked):
                 out[cells, slots] = pid
                 break
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _touching(lower, upper, disks):
+    """The links of disks ``lower[k]`` and ``upper[k]`` of which one is marked in ``disks``."""
+    keep = np.empty(lower.size, dtype=np.bool_)
+    for k in range(lower.size):
+        keep[k] = disks[lower[k]] or disks[upper[k]]
+    return lower[keep], upper[keep]
 
 
 def _tally_faces(field, patch, links):
