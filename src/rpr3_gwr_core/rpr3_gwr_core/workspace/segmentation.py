@@ -678,8 +678,8 @@ def _cut_sheets(field, cells, component, disk_links, full_faces):
 @numba.njit(cache=True, nogil=True)
 def _tree_links(lower, upper, parent, width):
     """The links of disks ``lower[k]`` and ``upper[k]`` (``cell * width +
-    slot``) across a face of a tree of cells, ``parent`` each cell's parent
-    (no cell's outside the tree)."""
+    slot``) across a face of a tree of cells: one cell is the other's
+    ``parent`` (scipy's predecessors, negative at the root and off the tree)."""
     keep = np.empty(lower.size, dtype=np.bool_)
     for k in range(lower.size):
         a, b = lower[k] // width, upper[k] // width
