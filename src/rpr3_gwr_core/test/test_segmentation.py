@@ -479,6 +479,38 @@ def test_patch_numbering_matches_the_whole_array_assignment(cases):
     np.testing.assert_array_equal(got, expected)
 
 
+def test_the_compiled_link_filters_keep_what_numpy_masks_keep(case):
+    field, seg, _ = case
+    n = field.max_solutions
+    count = field.count.astype(int)
+    rng = np.random.default_rng(3)
+    marked = rng.random(field.grid.size * n) < 0.01
+    for lo, up, match in seg.links:
+        # A forest of some of the axis's faces, as breadth_first_order marks one.
+        parent = np.full(field.grid.size, -9999)
+        some = rng.random(lo.size) < 0.3
+        parent[up[some]] = lo[some]
+        full = (count[lo] == count[up]) & (count[lo] > 0) & ((match >= 0).sum(axis=1) == count[lo])
+        for got, expected in zip(segmentation._full_faces(lo, up, match, field.count),
+                                 (lo[full], up[full])):
+            np.testing.assert_array_equal(got, expected)
+        a, b = segmentation.linked_solutions(lo, up, match)
+        cells_a, cells_b = a // n, b // n
+        masks = [
+            (segmentation._inside_regions(a, b, seg.region, n),
+             (seg.region[cells_a] == seg.region[cells_b]) & (seg.region[cells_a] > 0)),
+            (segmentation._tree_links(a, b, parent, n),
+             (parent[cells_a] == cells_b) | (parent[cells_b] == cells_a)),
+            (segmentation._touching(a, b, marked), marked[a] | marked[b]),
+        ]
+        # The forest and the marks leave links out.
+        assert not (masks[1][1].all() or masks[2][1].all())
+        for (got_a, got_b), mask in masks:
+            assert mask.any()
+            np.testing.assert_array_equal(got_a, a[mask])
+            np.testing.assert_array_equal(got_b, b[mask])
+
+
 def test_linked_solutions_are_the_nonzero_links(case):
     field, seg, _ = case
     n = field.max_solutions
