@@ -68,9 +68,13 @@ def mechanism_from_dict(data):
 
 
 def first_class(dispatcher, signature):
-    """A numba function compiled for ``signature`` as a first-class function
-    that compiled loops take as an argument (:attr:`Mechanism.step_kernel`,
-    :attr:`Mechanism.predict_kernel`)."""
+    """A numba function compiled for ``signature`` (now, unless it was) as a
+    first-class function that compiled loops take as an argument
+    (:attr:`Mechanism.step_kernel`, :attr:`Mechanism.predict_kernel`)."""
+    # Compiled (or loaded from numba's cache) on first use rather than at
+    # import, which every fresh process pays.
+    if signature.args not in dispatcher.overloads:
+        dispatcher.compile(signature)
     # Its address taken once: passing the dispatcher itself would look it up,
     # under numba's compiler lock, at every call.
     compiled = CompileResultWAP(dispatcher.overloads[signature.args])

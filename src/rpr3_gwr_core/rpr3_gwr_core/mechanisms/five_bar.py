@@ -383,7 +383,7 @@ def _step_kernel(parameters, pose, joints_from, joints_to):
     return margin
 
 
-@numba.njit(PREDICT_KERNEL_SIGNATURE, cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True)
 def _predict_kernel(parameters, poses, joints_from, joints_to, out):
     """:meth:`FiveBar.predict` of the solutions of one joint vector, as
     :data:`~.base.PREDICT_KERNEL_SIGNATURE` takes it; ``parameters`` are

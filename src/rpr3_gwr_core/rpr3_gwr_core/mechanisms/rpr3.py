@@ -678,7 +678,7 @@ def _step_kernel(parameters, pose, joints_from, joints_to):
     return margin
 
 
-@numba.njit(PREDICT_KERNEL_SIGNATURE, cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True)
 def _predict_kernel(parameters, poses, joints_from, joints_to, out):
     """:func:`_predict` of the solutions of one leg configuration, as
     :data:`~.base.PREDICT_KERNEL_SIGNATURE` takes it; ``parameters`` are

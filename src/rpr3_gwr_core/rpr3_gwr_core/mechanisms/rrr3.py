@@ -504,7 +504,7 @@ def _moving_euler(poses, joints_from, joints_to, geometry):
     return out
 
 
-@numba.njit(PREDICT_KERNEL_SIGNATURE, cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True)
 def _predict_kernel(parameters, poses, joints_from, joints_to, out):
     """:func:`_moving_euler` of the solutions of one joint vector, as
     :data:`~.base.PREDICT_KERNEL_SIGNATURE` takes it; ``parameters`` are
