@@ -3,7 +3,6 @@ which continuity's screen calls, against its batch :meth:`Mechanism.predict`
 and against the solutions of the moved joints themselves: an Euler step is
 exact to first order, so its error is far below the move."""
 
-import math
 import pathlib
 
 import numba
@@ -13,13 +12,11 @@ import pytest
 from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
 from rpr3_gwr_core.workspace.continuity import _screened, match_solutions
 from rpr3_gwr_core.workspace.field import compute_field
-from rpr3_gwr_core.workspace.grid import Axis, Grid
 
 CONFIG = pathlib.Path(__file__).resolve().parents[3] / "config"
-# Each mechanism file and the joint its slice fixes.
+# Each mechanism file and the joint its slice fixes (on the file's grid).
 SLICES = {"paper_3rpr.yaml": {"rho1": 17.0}, "five_bar.yaml": {},
           "three_rrr.yaml": {"th1": 0.0}, "three_prr.yaml": {"s1": 5.0}}
-CELLS = 201
 
 
 @numba.njit
@@ -31,18 +28,6 @@ def _predict(kernel, parameters, poses, joints_from, joints_to):
 
 def _described(name):
     return load_mechanism_file(CONFIG / name)
-
-
-def _coarse(grid):
-    """The slice with ``CELLS`` cells along each axis (a periodic axis keeps its turn)."""
-    axes = []
-    for a in grid.axes:
-        if a.periodic:
-            step = 2 * math.pi / CELLS
-            axes.append(Axis(a.joint, a.low, a.low + 2 * math.pi - step, step, periodic=True))
-        else:
-            axes.append(Axis(a.joint, a.low, a.high, (a.high - a.low) / (CELLS - 1)))
-    return Grid(axes=tuple(axes), fixed=grid.fixed)
 
 
 @pytest.mark.parametrize("name", SLICES)
@@ -77,7 +62,7 @@ def test_the_compiled_predictor_is_the_batch_predictor_to_first_order_exact(name
 @pytest.mark.parametrize("name", SLICES)
 def test_the_screen_settles_most_faces_and_leaves_the_links_unchanged(name):
     described = _described(name)
-    grid = _coarse(described.grid(SLICES[name]))
+    grid = described.grid(SLICES[name])
     field = compute_field(described.mechanism, grid)
     joints = grid.joints()
     for axis, (lower, upper) in enumerate(grid.pairs()):
