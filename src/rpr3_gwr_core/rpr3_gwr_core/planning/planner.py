@@ -542,10 +542,9 @@ class Planner:
     def _weights(self):
         """The clearance weights a global path's local path is tried with,
         each with the inflation of its searches' estimate."""
-        if self.clearance_weight == self.retries.detour_weight:
-            return {self.clearance_weight: 1}
-        return {self.clearance_weight: 1,
-                self.retries.detour_weight: self.retries.detour_inflation}
+        weights = {self.clearance_weight: 1}
+        weights.setdefault(self.retries.detour_weight, self.retries.detour_inflation)
+        return weights
 
     def _attempts(self, paths, start_patch, goal_patch):
         """The listed global paths, then longer ones, ``retries.global_paths`` in all;
