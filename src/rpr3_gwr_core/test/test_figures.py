@@ -78,6 +78,14 @@ def legend_texts(legend):
     return [t.get_text() for t in legend.get_texts()]
 
 
+def legend_handles(legend):
+    """The legend's handles in the order of its texts: ``legend_handles``
+    from matplotlib 3.7 on, ``legendHandles`` in 3.6, the oldest supported."""
+    if hasattr(legend, "legend_handles"):
+        return legend.legend_handles
+    return legend.legendHandles
+
+
 def captions(figure):
     return " ".join(t.get_text() for t in figure.texts)
 
@@ -133,7 +141,7 @@ def test_the_field_figure_hatches_what_a_scene_blocks(coarse_paper_roadmap, tmp_
     written(figure, tmp_path)
     legend = figure.axes[0].get_legend()
     hatches = {t.get_text(): h.get_hatch() for t, h in zip(legend.get_texts(),
-                                                           legend.legend_handles)
+                                                           legend_handles(legend))
                if t.get_text().startswith("scene")}
     assert hatches["scene blocks some solutions"] == "//"
     assert f"{world.n_parts} free parts in the scene" in figure.axes[0].get_title()
@@ -177,7 +185,7 @@ def test_a_region_has_one_colour_in_every_figure(coarse_paper_roadmap):
         field_figure(coarse_paper_roadmap).axes[0]).items()}
     legend = roadmap_figure(coarse_paper_roadmap).axes[0].get_legend()
     roadmap_colours = {int(t.get_text().split()[1]): tuple(np.round(h.get_facecolor(), 6))
-                       for t, h in zip(legend.get_texts(), legend.legend_handles)
+                       for t, h in zip(legend.get_texts(), legend_handles(legend))
                        if t.get_text().startswith("region")}
     assert field_colours == roadmap_colours
     plan = plan_figure(coarse_paper_roadmap, planned(coarse_paper_roadmap, Q1, Q2))

@@ -146,16 +146,37 @@ def test_smoothing_pulls_full_roadmap_paths_taut(full_planner):
     assert _length(far.joints) < 1.05 * 17.19
 
 
-# Pairs drawn with seed 11 whose local paths keep failing the clearance's
-# quarter at a singular sliver thinner than a cell: every repair is refused,
-# and the plan is one of the tried paths that keeps min_margin.
-FALLBACK_SEED, FALLBACK_PAIRS = 11, (6, 31, 110, 268)
+# Random same-aspect pairs of the full roadmap's box the two tests below
+# search, in order, for the pairs that show the behaviour they check: which
+# pairs do depends on the numerics of the installed numpy and scipy.
+CASE_SEED, CASE_DRAWS, CASES_WANTED = 11, 600, 4
+# Joint limits the plans of the rounds after the first are timed with [/s, /s**2].
+LIMITS = (2.0, 5.0)
+
+
+def _cases(plan, shows):
+    """Up to ``CASES_WANTED`` of the drawn pairs whose plan shows the
+    behaviour, as ``(plan, trace, goal_pose)``: ``plan(start, goal)`` returns
+    the plan and the trace the caller's tracking filled while it planned, and
+    ``shows(trace)`` says whether the behaviour happened."""
+    pairs = same_aspect_pairs(random_full_configurations(
+        np.random.default_rng(CASE_SEED), CASE_DRAWS))
+    found = []
+    for (start, _), (goal, goal_pose) in pairs:
+        result, trace = plan(start, goal)
+        if shows(trace):
+            found.append((result, trace, goal_pose))
+            if len(found) == CASES_WANTED:
+                break
+    assert found, f"none of the {len(pairs)} drawn pairs shows the behaviour under test"
+    return found
 
 
 def test_paths_kept_after_failed_repairs_pass_the_independent_continuation(
         full_planner, monkeypatch):
-    pairs = same_aspect_pairs(random_full_configurations(
-        np.random.default_rng(FALLBACK_SEED), 600))
+    """Where every repair of a local path is refused (at a singular sliver
+    thinner than a cell), the plan is one of the tried paths that keeps
+    min_margin, and it passes the independent continuation."""
     repaired = Planner._repaired_path
     fell_back = []
 
@@ -165,27 +186,19 @@ def test_paths_kept_after_failed_repairs_pass_the_independent_continuation(
             args[1], args[2], args[3]))
         return result, joints, patches, route
 
-    monkeypatch.setattr(Planner, "_repaired_path", tracked)
-    for k in FALLBACK_PAIRS:
-        (start, _), (goal, goal_pose) = pairs[k]
+    def plan(start, goal):
         fell_back.clear()
-        plan = full_planner.plan(start, goal)
-        assert any(fell_back), k
-        assert_executable(plan, goal_pose, full_planner.min_margin)
+        return full_planner.plan(start, goal), list(fell_back)
 
-
-# Pairs drawn with seed 11 whose paths pass only after a repair.
-REPAIRED_PAIRS = (87, 163)
-# Joint limits the plans of the rounds after the first are timed with [/s, /s**2].
-LIMITS = (2.0, 5.0)
+    monkeypatch.setattr(Planner, "_repaired_path", tracked)
+    for result, _, goal_pose in _cases(plan, any):
+        assert_executable(result, goal_pose, full_planner.min_margin)
 
 
 def test_repairs_search_whole_paths_when_no_stretch_gives_a_valid_path(full_planner,
                                                                        monkeypatch):
     """Stretches that keep the refused path as it was (as where no way round
     is near) leave the second round, whose repairs search whole paths."""
-    pairs = same_aspect_pairs(random_full_configurations(
-        np.random.default_rng(FALLBACK_SEED), 600))
     validated = Planner._validated_path
     tried = []
 
@@ -194,17 +207,19 @@ def test_repairs_search_whole_paths_when_no_stretch_gives_a_valid_path(full_plan
         tried.append((kwargs.get("reroute", True), result[0].ok))
         return result
 
+    def plan(start, goal):
+        tried.clear()
+        options = PlanOptions(max_velocity=LIMITS[0], max_acceleration=LIMITS[1])
+        return full_planner.plan(start, goal, options), list(tried)
+
     monkeypatch.setattr(Planner, "_validated_path", tracked)
     monkeypatch.setattr(planner_module, "_rerouted",
                         lambda search, cells, patches, *rest: (cells, patches))
-    for k in REPAIRED_PAIRS:
-        (start, _), (goal, goal_pose) = pairs[k]
-        tried.clear()
-        plan = full_planner.plan(start, goal, PlanOptions(max_velocity=LIMITS[0],
-                                                          max_acceleration=LIMITS[1]))
-        assert tried[-1] == (False, True) and (True, True) not in tried, k
-        assert_executable(plan, goal_pose, full_planner.min_margin)
-        assert_within_limits(plan, *LIMITS)
+    whole_searched = _cases(plan, lambda trace: any(not reroute for reroute, _ in trace))
+    for result, trace, goal_pose in whole_searched:
+        assert trace[-1] == (False, True)
+        assert_executable(result, goal_pose, full_planner.min_margin)
+        assert_within_limits(result, *LIMITS)
 
 
 # A pair of one patch whose inflated detour searches find only paths the

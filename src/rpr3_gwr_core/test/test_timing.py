@@ -41,8 +41,11 @@ def test_a_path_too_fast_for_nanoseconds_is_refused():
         time_parameterize(path, 1e12, 1e30)
 
 
+# Steps of 1e-3 to 2 either way, drawn rather than filtered: hypothesis 6.98
+# (the floor) fails its health check on the filtered draws.
+step_values = st.floats(1e-3, 2.0, exclude_min=True)
 steps = arrays(np.float64, st.tuples(st.integers(1, 30), st.just(3)),
-               elements=st.floats(-2.0, 2.0).filter(lambda v: abs(v) > 1e-3))
+               elements=st.one_of(step_values, step_values.map(lambda v: -v)))
 
 
 @settings(max_examples=300, deadline=None)
