@@ -2,11 +2,15 @@
 #   make demo   set up if needed, then run the main job
 #   make test   set up if needed, then run every test
 # and, beside them, make docs builds the documentation into docs/_build/html.
+# The range of supported versions is tested at its floor too (CI runs both):
+#   make test-floor        every test on a stock ROS 2 Jazzy's versions
+#   make test-core-py312   the core's tests on Python 3.12, Jazzy's interpreter
 SHELL := /bin/bash
 .SHELLFLAGS := -eo pipefail -c
 ENV := source ros2_ws/env.sh
+FLOOR := RPR3_GWR_PROFILE=floor
 
-.PHONY: demo test setup build bench docs clean
+.PHONY: demo test test-floor test-core-py312 setup build bench docs clean
 
 setup build:
 	bash ros2_ws/setup.sh
@@ -17,6 +21,14 @@ demo: build
 test: build
 	$(ENV) && python -m pytest
 
+test-floor:
+	$(FLOOR) bash ros2_ws/setup.sh
+	export $(FLOOR) && $(ENV) && python -m pytest
+
+test-core-py312:
+	bash tools/core_env.sh 3.12 .venv-core-py312
+	PATH="$(CURDIR)/.venv-core-py312/bin:$$PATH" python -m pytest src/rpr3_gwr_core/test
+
 bench: build
 	$(ENV) && python bench/bench_roadmap.py && python bench/bench_planning.py
 
@@ -24,5 +36,5 @@ docs: build
 	$(ENV) && sphinx-build -W --keep-going -q docs docs/_build/html && echo "docs in docs/_build/html/index.html"
 
 clean:
-	rm -rf .venv ros2_ws/build ros2_ws/install ros2_ws/log ros2_ws/.build-stamp \
-	  docs/_build docs/_generated
+	rm -rf .venv .venv-floor .venv-core-py312 ros2_ws/build ros2_ws/install ros2_ws/log \
+	  ros2_ws/floor docs/_build docs/_generated

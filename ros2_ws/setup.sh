@@ -1,20 +1,26 @@
 #!/usr/bin/env bash
 # Set up the rpr3-gwr workspace; idempotent, and quick when nothing changed.
 #
-# 1. A virtual environment at .venv.  Without /opt/ros/jazzy it receives the
-#    pinned ROS 2 Jazzy wheels (requirements-ros.txt) and becomes the ROS
-#    prefix; with /opt/ros/jazzy it sees that install's Python packages.
-#    Either way it gets the pinned Python dependencies (requirements.txt).
-# 2. The wheels' CMake export files name the include and site-packages
-#    directories of the interpreter they were built with; they are rewritten
-#    to this interpreter's (a no-op the second time).
-# 3. colcon build of src/ (rpr3_gwr_msgs, rpr3_gwr_core, rpr3_gwr_nodes).
-# Each step is skipped when a stamp shows its inputs are unchanged.
+# Two installs, chosen by whether /opt/ros/jazzy exists:
+# - system: a ROS 2 Jazzy from apt.  rosdep installs the distro packages that
+#   the package.xml files name (the scientific stack among them); a virtual
+#   environment at .venv sees them (--system-site-packages), and pip adds only
+#   what no rosdep key provides (requirements-system.txt), constrained to the
+#   installed versions so that it never upgrades or shadows a distro package.
+# - wheels: no ROS install.  .venv receives the pinned ROS 2 Jazzy wheels
+#   (requirements-ros.txt) and becomes the ROS prefix, with the pinned Python
+#   dependencies (requirements.txt).  RPR3_GWR_PROFILE=floor builds instead
+#   .venv-floor, the same with the oldest supported versions, those of a
+#   stock Jazzy (requirements-floor.txt), in its own colcon folders.
+# The wheels' CMake export files name the include and site-packages
+# directories of the interpreter they were built with; they are rewritten to
+# this interpreter's (a no-op the second time).  Then colcon builds src/
+# (rpr3_gwr_msgs, rpr3_gwr_core, rpr3_gwr_nodes).  Each step is skipped when
+# a stamp shows its inputs are unchanged.
 set -euo pipefail
 
 ws="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(dirname "$ws")"
-venv="$root/.venv"
 
 log() { printf 'rpr3-gwr setup: %s\n' "$*" >&2; }
 
@@ -47,8 +53,19 @@ step() {
   return "$status"
 }
 
+profile="${RPR3_GWR_PROFILE:-pinned}"
+case "$profile" in
+  pinned) venv="$root/.venv" colcon_base="$ws" ;;
+  floor) venv="$root/.venv-floor" colcon_base="$ws/floor" ;;
+  *) log "RPR3_GWR_PROFILE is pinned (the default) or floor, not '$profile'"; exit 1 ;;
+esac
+
 if [ -f /opt/ros/jazzy/setup.bash ]; then
   mode=system
+  if [ "$profile" != pinned ]; then
+    log "RPR3_GWR_PROFILE=$profile is for the wheel install: on a ROS 2 Jazzy from apt the distro's versions are the floor"
+    exit 1
+  fi
   set +u
   # shellcheck disable=SC1091
   source /opt/ros/jazzy/setup.bash
@@ -70,31 +87,71 @@ else
     exit 1
   fi
 fi
+requirements() { "$python" "$ws/requirements.py" "$@"; }
+if [ "$mode" = system ]; then
+  log "using ROS 2 Jazzy from /opt/ros/jazzy, its Python ($("$python" --version 2>&1)) and the distro's packages"
+else
+  log "using the ROS 2 Jazzy wheels from PyPI in ${venv#"$root"/} ($profile versions)"
+fi
 
-inputs="$mode $(cat "$ws/requirements.txt" "$ws/requirements-ros.txt" "$ws/setup.sh" | sha256sum | cut -c1-16)"
+inputs="$mode $profile $(cat "$ws"/requirements*.txt "$ws/requirements.py" "$ws/setup.sh" \
+  "$root"/src/*/package.xml | sha256sum | cut -c1-16)"
 stamp="$venv/.rpr3-gwr-setup"
 if [ "$(cat "$stamp" 2>/dev/null)" != "$inputs" ]; then
-  log "creating the virtual environment ($mode); the first set-up takes a few minutes"
+  if [ "$mode" = system ]; then
+    if ! command -v rosdep >/dev/null; then
+      log "rosdep is missing: install it (sudo apt install python3-rosdep), then run this again"
+      exit 1
+    fi
+    if ! rosdep check --from-paths "$root/src" --ignore-src --rosdistro jazzy >/dev/null 2>&1; then
+      # In the foreground: rosdep asks sudo for the password of a user who
+      # is not root.
+      if [ ! -d "${ROS_HOME:-$HOME/.ros}/rosdep/sources.cache" ]; then
+        log "updating rosdep's database"
+        rosdep update --rosdistro jazzy ||
+          { log "rosdep has no sources: run 'sudo rosdep init', then this again"; exit 1; }
+      fi
+      log "installing the distro packages the package.xml files name (rosdep install)"
+      rosdep install --from-paths "$root/src" --ignore-src -y --rosdistro jazzy
+    fi
+  fi
+  log "creating the virtual environment; the first set-up takes a few minutes"
   rm -rf "$venv"
+  lists="$venv/rpr3-gwr-requirements"
   if [ "$mode" = system ]; then
     "$python" -m venv --system-site-packages "$venv"
+    mkdir -p "$lists"
+    # Everything the distro installed, pinned: pip may add packages beside
+    # them but never replace one.
+    "$venv/bin/python" "$ws/requirements.py" installed > "$lists/constraints.txt"
+    requirements select "$ws/requirements-system.txt" "$ws/requirements.txt" > "$lists/pip.txt"
+    if ! command -v colcon >/dev/null; then
+      grep '^colcon-common-extensions==' "$ws/requirements-ros.txt" >> "$lists/pip.txt"
+    fi
+    step "installing with pip what no rosdep key provides: $(sed 's/==.*//' "$lists/pip.txt" | paste -sd ' ')" \
+      "$venv/bin/python" -m pip install -qq -c "$lists/constraints.txt" -r "$lists/pip.txt" \
+      --report "$lists/pip-report.json"
   else
     "$python" -m venv "$venv"
+    mkdir -p "$lists"
+    # pip runs with -qq: a machine's pip configuration may name index folders
+    # that do not exist, and pip would warn about each for every package.
+    step "upgrading pip" "$venv/bin/python" -m pip install -qq --upgrade pip
+    if [ "$profile" = floor ]; then
+      requirements merge "$ws/requirements-ros.txt" "$ws/requirements.txt" \
+        --floor "$ws/requirements-floor.txt" > "$lists/pip.txt"
+    else
+      requirements merge "$ws/requirements-ros.txt" "$ws/requirements.txt" > "$lists/pip.txt"
+    fi
+    step "installing the ROS 2 Jazzy wheels and the Python dependencies ($(wc -l < "$lists/pip.txt") pinned)" \
+      "$venv/bin/python" -m pip install -qq -r "$lists/pip.txt" --report "$lists/pip-report.json"
   fi
-  # pip runs with -qq: a machine's pip configuration may name index folders
-  # that do not exist, and pip would warn about each for every package.
-  step "upgrading pip" "$venv/bin/python" -m pip install -qq --upgrade pip
-  if [ "$mode" = wheels ]; then
-    step "installing the ROS 2 Jazzy wheels ($(grep -c '==' "$ws/requirements-ros.txt") pinned)" \
-      "$venv/bin/python" -m pip install -qq -r "$ws/requirements-ros.txt"
-  elif ! command -v colcon >/dev/null; then
-    step "installing colcon" "$venv/bin/python" -m pip install -qq \
-      "$(grep '^colcon-common-extensions==' "$ws/requirements-ros.txt")"
+  requirements report "$lists/pip-report.json" > "$lists/pip-installed.txt"
+  log "pip installed $(wc -l < "$lists/pip-installed.txt") packages, listed in ${lists#"$root"/}/pip-installed.txt"
+  if [ "$mode" = system ]; then
+    sed 's/^/  /' "$lists/pip-installed.txt" >&2
   fi
-  step "installing the Python dependencies ($(grep -c '==' "$ws/requirements.txt") pinned)" \
-    "$venv/bin/python" -m pip install -qq -r "$ws/requirements.txt"
   echo "$inputs" > "$stamp"
-  rm -f "$ws/.build-stamp"
 fi
 
 if [ "$mode" = wheels ]; then
@@ -104,12 +161,20 @@ if [ "$mode" = wheels ]; then
     xargs -0 -r sed -i \
       -e "s#/opt/python/cp311-cp311/include/python3.11#$include#g" \
       -e "s#/opt/python/cp311-cp311/lib/python3.11/site-packages#$site#g"
+  # They name numpy 2's include directory too, which numpy 1 (the floor)
+  # keeps elsewhere.
+  numpy_include="$("$venv/bin/python" -c 'import numpy; print(numpy.get_include())')"
+  if [ "$numpy_include" != "$site/numpy/_core/include" ]; then
+    { grep -rlZ --include='*.cmake' "$site/numpy/_core/include" "$venv/share" || true; } |
+      xargs -0 -r sed -i -e "s#$site/numpy/_core/include#$numpy_include#g"
+  fi
   export AMENT_PREFIX_PATH="$venv" CMAKE_PREFIX_PATH="$venv"
 fi
 
 sources="$(cd "$root" && find src -type f -not -path '*/__pycache__/*' -not -path '*/.hypothesis/*' \
   -not -name '*.pyc' -print0 | sort -z | xargs -0 sha256sum | sha256sum | cut -c1-16)"
-if [ "$(cat "$ws/.build-stamp" 2>/dev/null)" != "$inputs $sources" ]; then
+build_stamp="$colcon_base/install/.rpr3-gwr-build"
+if [ "$(cat "$build_stamp" 2>/dev/null)" != "$inputs $sources" ]; then
   set +u
   # shellcheck disable=SC1091
   source "$venv/bin/activate"
@@ -117,15 +182,21 @@ if [ "$(cat "$ws/.build-stamp" 2>/dev/null)" != "$inputs $sources" ]; then
   # colcon's live status line is for terminals; its start and end lines of
   # each package stay, with the step's own time.
   step "building the workspace with colcon (the messages take a minute or two)" \
-    bash -c 'cd "$1" && colcon --log-base log build --symlink-install \
+    bash -c 'cd "$1" && colcon --log-base "$3/log" build --symlink-install \
+      --base-paths src --build-base "$3/build" --install-base "$3/install" \
       --event-handlers console_cohesion- status- \
-      --cmake-args -DBUILD_TESTING=OFF -DPython3_EXECUTABLE="$2/bin/python" >&2' _ "$ws" "$venv"
+      --cmake-args -DBUILD_TESTING=OFF -DPython3_EXECUTABLE="$2/bin/python" >&2' \
+      _ "$ws" "$venv" "$colcon_base"
   # The packages are linked into the workspace, not installed, so nothing
   # compiled their bytecode: a process that may not write it
   # (PYTHONDONTWRITEBYTECODE) would compile every module at each start.
   step "compiling the packages' bytecode" \
     "$venv/bin/python" -m compileall -q "$root/src/rpr3_gwr_core/rpr3_gwr_core" \
     "$root/src/rpr3_gwr_nodes/rpr3_gwr_nodes"
-  echo "$inputs $sources" > "$ws/.build-stamp"
+  echo "$inputs $sources" > "$build_stamp"
 fi
-log "ready: source ros2_ws/env.sh"
+if [ "$profile" = pinned ]; then
+  log "ready: source ros2_ws/env.sh"
+else
+  log "ready: RPR3_GWR_PROFILE=$profile source ros2_ws/env.sh"
+fi
