@@ -193,7 +193,8 @@ def test_the_three_rrr_planner_refuses_the_joints_of_another_mechanism(three_rrr
     assert "th1" in response.error_msg
     off_slice = Configuration(positions=[0.5, *TH[1:]], mode=MODE_A)
     response = three_rrr.plan(off_slice, _rrr(MODE_B))
-    assert response.error_code == PlanPath.Response.ERROR_RHO1_MISMATCH, response.error_msg
+    assert response.error_code == PlanPath.Response.ERROR_FIXED_JOINT_MISMATCH, response.error_msg
+    assert response.error_msg.startswith("th1 = 0.5 but the roadmap is built for th1 = 0")
 
 
 def test_the_five_bar_refuses_an_assembly_mode_change_as_other_aspect(ros_context):

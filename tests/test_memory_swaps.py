@@ -41,7 +41,7 @@ def _request(rho1, legs, alphas):
 
 
 # An assembly-mode change on each roadmap (the paper's at rho1 = 17): planned
-# by the roadmap of its rho1, refused (RHO1_MISMATCH) by the other, as a
+# by the roadmap of its rho1, refused (FIXED_JOINT_MISMATCH) by the other, as a
 # client's requests would be while the planner swaps; either answer names
 # the roadmap that gave it.
 REQUESTS = {17.0: _request(17.0, (20.0, 25.0), (29.47, 96.13)),

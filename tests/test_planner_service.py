@@ -237,7 +237,7 @@ def test_the_response_names_the_roadmap_that_answered(service):
     assert list(response.roadmap_fixed_joints) == ["rho1"]
     assert list(response.roadmap_fixed_values) == [17.0]
     failed = service.plan((13.0, 12.0, 18.0, 0.0), Q2)
-    assert failed.error_code == PlanPath.Response.ERROR_RHO1_MISMATCH
+    assert failed.error_code == PlanPath.Response.ERROR_FIXED_JOINT_MISMATCH
     assert list(failed.roadmap_fixed_values) == [17.0]
 
 

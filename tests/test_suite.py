@@ -206,7 +206,7 @@ def test_whole_chain_plan_execute_record(suite):
     ((17.0, 12.0, math.inf, 0.0), PlanPath.Response.ERROR_INVALID_INPUT),
     ((17.0, -3.0, 18.0, 0.0), PlanPath.Response.ERROR_INVALID_INPUT),
     ((17.0, 80.0, 18.0, 0.0), PlanPath.Response.ERROR_OUT_OF_GRID),
-    ((13.0, 12.0, 18.0, D(122.82)), PlanPath.Response.ERROR_RHO1_MISMATCH),
+    ((13.0, 12.0, 18.0, D(122.82)), PlanPath.Response.ERROR_FIXED_JOINT_MISMATCH),
     ((17.0, 2.0, 45.0, 0.0), PlanPath.Response.ERROR_NO_SOLUTION),
     ((17.0, 12.0, 18.0, 0.0), PlanPath.Response.ERROR_NO_ASSEMBLY_MODE),
     (_singular_configuration(), PlanPath.Response.ERROR_SINGULAR),

@@ -19,12 +19,15 @@ from rpr3_gwr_core.exceptions import (AssemblyModeError, InfeasiblePathError, In
 from rpr3_gwr_core.mechanisms.rpr3 import ThreeRPR
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, rho1_slice
 from rpr3_gwr_core.planning.global_planning import feasibility, global_paths
+from rpr3_gwr_core.planning.locate import FIXED_JOINT_TOL
 from rpr3_gwr_core.planning.planner import DEFAULT_CLEARANCE, PlanOptions, Planner
 from rpr3_gwr_core.workspace.grid import Axis, Grid
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
 from rpr3_gwr_core.planning.segments import Sheets, shortcut_path
 from rpr3_gwr_core.planning.trajectory import cut_corners, time_parameterize
 from rpr3_gwr_core.planning.validation import validate_path
+
+from pose_reference import follow, legs_of
 
 D = math.radians
 Q1, Q2 = (17, 12, 18, D(122.82)), (17, 10, 25, D(-24.24))
@@ -269,6 +272,24 @@ def test_time_parameterisation_respects_the_limits(planner):
 def test_bad_configurations_raise_their_own_error(planner, configuration, error):
     with pytest.raises(error):
         planner.plan(configuration, Q2)
+
+
+def test_a_fixed_joint_within_the_tolerance_is_the_slice_s(planner):
+    """A slice's joint given a little off (rho1 = 17 + a relative half
+    tolerance, as from rounded digits) plans from where it is onto the slice,
+    and the independent continuation follows the plan to the goal; twice the
+    tolerance off is refused with the joint and the tolerance named."""
+    near = (17 * (1 + FIXED_JOINT_TOL / 2), *Q1[1:])
+    plan = planner.plan(near, Q2)
+    np.testing.assert_array_equal(plan.joints[0], near[:3])
+    assert plan.joints[-1, 0] == 17
+    followed = follow(plan.joints, plan.poses[0], planner.min_margin * (1 - 1e-3))
+    assert followed["ok"], followed["why"]
+    np.testing.assert_allclose(legs_of(plan.poses[0]), near[:3], atol=1e-7)
+    np.testing.assert_allclose(legs_of(followed["pose"]), Q2[:3], atol=1e-6)
+    assert abs(math.remainder(followed["pose"][2] - Q2[3], 2 * math.pi)) < D(1)
+    with pytest.raises(FixedJointMismatchError, match=r"rho1 = .* within 0\.0001"):
+        planner.plan((17 * (1 + 2 * FIXED_JOINT_TOL), *Q1[1:]), Q2)
 
 
 def test_a_configuration_on_the_singular_locus_is_refused(planner):

@@ -114,7 +114,7 @@ Example     ros2 run rpr3_gwr_nodes planner --ros-args -p plan_workers:=0 -p cle
 ERROR_CODES = {
     "INVALID_INPUT": PlanPath.Response.ERROR_INVALID_INPUT,
     "OUT_OF_GRID": PlanPath.Response.ERROR_OUT_OF_GRID,
-    "FIXED_JOINT_MISMATCH": PlanPath.Response.ERROR_RHO1_MISMATCH,
+    "FIXED_JOINT_MISMATCH": PlanPath.Response.ERROR_FIXED_JOINT_MISMATCH,
     "NO_SOLUTION": PlanPath.Response.ERROR_NO_SOLUTION,
     "NO_ASSEMBLY_MODE": PlanPath.Response.ERROR_NO_ASSEMBLY_MODE,
     "SINGULAR": PlanPath.Response.ERROR_SINGULAR,

@@ -27,11 +27,16 @@ from ..exceptions import (AssemblyModeError, FixedJointMismatchError, InvalidInp
                           NoSolutionError, SingularityError)
 from .validation import DEFAULT_MAX_STEP, DEFAULT_MIN_MARGIN, validate_path
 
-__all__ = ["Location", "locate", "DEFAULT_MODE_TOL"]
+__all__ = ["Location", "locate", "DEFAULT_MODE_TOL", "FIXED_JOINT_TOL"]
 
 # One degree, for an angular mode coordinate [rad].
 DEFAULT_MODE_TOL = math.radians(1.0)
-_FIXED_TOL = 1e-9
+FIXED_JOINT_TOL = 1e-4
+"""Largest difference between a configuration's value of a joint the grid
+fixes and the grid's value, relative to the larger of 1 and that value: a
+configuration within it lies on the slice (an angle given in degrees to
+three decimals, -20.574 for the radians of a slice, does), and its path
+starts by moving the joint onto the slice's value."""
 # Cells within this many steps of a configuration are candidates for it.
 _SEARCH_RADIUS = 4.0
 # A continued pose within this distance (relative to the mechanism's scale,
@@ -82,7 +87,8 @@ def locate(roadmap, configuration, mode_tol=DEFAULT_MODE_TOL, min_margin=DEFAULT
     ----------
     roadmap : Roadmap
     configuration : sequence of float, shape (n_joints + 1,)
-        The joints [joint unit] (those the grid fixes must have its values),
+        The joints [joint unit] (those the grid fixes within
+        :data:`FIXED_JOINT_TOL` of its values),
         then the approximate ``mode_coordinate`` of the pose that selects
         the assembly mode (the 3-RPR: ``(rho1, rho2, rho3, alpha)``).
     mode_tol : float
@@ -116,10 +122,11 @@ def locate(roadmap, configuration, mode_tol=DEFAULT_MODE_TOL, min_margin=DEFAULT
     joints, wanted = np.array(values[:-1]), values[-1]
     mechanism.check_joints(joints)
     for joint, value in grid.fixed:
-        if abs(joints[joint] - value) > _FIXED_TOL * max(1.0, abs(value)):
+        if abs(joints[joint] - value) > FIXED_JOINT_TOL * max(1.0, abs(value)):
             name = mechanism.joint_names[joint]
-            raise FixedJointMismatchError(f"{name} = {joints[joint]} but the roadmap is built "
-                                          f"for {name} = {value}")
+            raise FixedJointMismatchError(
+                f"{name} = {joints[joint]} but the roadmap is built for {name} = {value} "
+                f"(a value within {FIXED_JOINT_TOL:g} x max(1, |{value:g}|) is taken as its)")
     grid.cell_of(joints)  # raises OutOfGridError
     count, solutions = mechanism.solve(joints[None, :])
     poses = solutions[0, :count[0]]
