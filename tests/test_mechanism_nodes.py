@@ -2,7 +2,9 @@
 mechanism file: the builder builds the 3-RRR's slice th1 = 0, the planner
 plans its non-singular assembly-mode change (checked by a continuation of
 the test's own) and the driver executes it; on the five-bar the planner
-refuses an assembly-mode change as FEASIBILITY_OTHER_ASPECT.  Real rclpy and
+refuses an assembly-mode change as FEASIBILITY_OTHER_ASPECT; on a user's
+3-RRR whose box middle cannot be assembled the nodes start from its file
+alone.  Real rclpy and
 Fast DDS, the nodes in this process, spun by one executor thread, and a
 PlannerClient spinning itself in the test's thread."""
 
@@ -15,6 +17,7 @@ import pytest
 import yaml
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import Configuration
 from rpr3_gwr_msgs.srv import PlanPath
@@ -216,5 +219,32 @@ def test_the_five_bar_refuses_an_assembly_mode_change_as_other_aspect(ros_contex
         assert list(response.trajectory.joint_names) == ["th1", "th2"]
         assert not response.roadmap_fixed_joints
         assert math.isclose(response.trajectory.points[0].positions[0], 3.1, abs_tol=1e-9)
+    finally:
+        suite.close()
+
+
+# A user's 3-RRR (base side 30, platform side 8, links 10 and 10) whose box
+# middle th = (0, 0, 0) cannot be assembled, in a file without a home.
+USER_RRR = {"mechanism": {"kind": "3-RRR", "a1": [0.0, 0.0], "a2": [30.0, 0.0],
+                          "a3": [15.0, 15.0 * math.sqrt(3)], "d1": 8.0, "d3": 8.0,
+                          "beta": math.pi / 3, "l1": 10.0, "l2": 10.0},
+            "joints": [{"name": name, "periodic": True, "cells": 120} for name in TH_NAMES]}
+
+
+def test_the_nodes_start_from_a_file_alone_where_the_box_middle_cannot_be_assembled(
+        ros_context, tmp_path):
+    path = tmp_path / "user_rrr.yaml"
+    path.write_text(yaml.safe_dump(USER_RRR))
+    home = load_mechanism_file(str(path)).default_home()
+    suite = Suite(ros_context, path, "user_rrr", driver=True)
+    try:
+        assert suite.planner.planner.roadmap.grid.fixed == ((0, home[0]),)
+        deadline = time.monotonic() + 10.0
+        while not suite.joint_states and time.monotonic() < deadline:
+            time.sleep(0.05)
+        np.testing.assert_allclose(suite.joint_states[-1].position[:3], home[:3], atol=1e-12)
+        at_home = Configuration(joint_names=TH_NAMES, positions=list(home[:3]), mode=home[3])
+        response = suite.plan(at_home, at_home, feasibility_only=True)
+        assert response.success, response.error_msg
     finally:
         suite.close()

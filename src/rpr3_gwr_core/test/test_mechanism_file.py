@@ -5,11 +5,13 @@ import json
 import math
 import pathlib
 
+import numpy as np
 import pytest
+from scipy.optimize import brentq
 
 from rpr3_gwr_core.exceptions import InvalidInputError
 from rpr3_gwr_core.io.cli import main
-from rpr3_gwr_core.io.mechanism_file import (UNIFORM_CELLS, load_mechanism_file,
+from rpr3_gwr_core.io.mechanism_file import (HOME_SAMPLES, UNIFORM_CELLS, load_mechanism_file,
                                               mechanism_file_from_dict, roadmap_grid)
 from rpr3_gwr_core.mechanisms import DEFAULT_FIVE_BAR, DEFAULT_THREE_RRR
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID
@@ -91,6 +93,109 @@ def test_a_file_may_put_the_legs_in_one_layer():
     described = mechanism_file_from_dict(_document(bodies={"leg_layers": [1, 1]}))
     assert described.bodies.leg_layers == (1, 1)
     assert mechanism_file_from_dict(_document()).bodies is None
+
+
+# A user's 3-RRR (base side 30, platform side 8, links 10 and 10): its box
+# middle th = (0, 0, 0) puts two elbows 30 apart, beyond the platform's
+# reach of 8 + 2 x 10, so it cannot be assembled there.
+USER_RRR = {"kind": "3-RRR", "a1": [0.0, 0.0], "a2": [30.0, 0.0],
+            "a3": [15.0, 15.0 * math.sqrt(3)], "d1": 8.0, "d3": 8.0, "beta": math.pi / 3,
+            "l1": 10.0, "l2": 10.0}
+TORUS = [{"name": name, "periodic": True, "cells": 120} for name in ("th1", "th2", "th3")]
+
+
+def _closure_gaps(mechanism, th, alpha):
+    """For 3-RRR joints ``th`` (shape (n, 3)) and platform angles ``alpha``
+    (shape (m,)), by circle intersection: B1 lies l2 from elbow 1 and, moved
+    by -d1 along the platform's side, l2 from elbow 2; at each of those two
+    points, how far B3 lies from l2 of elbow 3.  Shape (2, n, m), NaN where
+    the two circles do not meet."""
+    base = np.array([mechanism["a1"], mechanism["a2"], mechanism["a3"]], dtype=float)
+    angles = np.asarray(th, dtype=float)[..., None]
+    elbows = base + mechanism["l1"] * np.concatenate([np.cos(angles), np.sin(angles)], axis=-1)
+    alpha = np.asarray(alpha, dtype=float)
+    side1 = mechanism["d1"] * np.stack([np.cos(alpha), np.sin(alpha)], axis=-1)
+    turned = alpha + mechanism["beta"]
+    side3 = mechanism["d3"] * np.stack([np.cos(turned), np.sin(turned)], axis=-1)
+    c1 = elbows[:, None, 0]
+    c2 = elbows[:, None, 1] - side1[None]
+    r = mechanism["l2"]
+    gap = np.linalg.norm(c2 - c1, axis=-1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        along = (c2 - c1) / gap
+        half = np.sqrt(r * r - gap * gap / 4)
+    normal = np.stack([-along[..., 1], along[..., 0]], axis=-1)
+    middle = c1 + along * gap / 2
+    return np.stack([np.linalg.norm(middle + sign * half * normal + side3[None]
+                                    - elbows[:, None, 2], axis=-1) - r
+                     for sign in (1.0, -1.0)])
+
+
+def _assemblable(mechanism, th, alphas=2880):
+    """Whether each row of 3-RRR joints can be assembled: the closure gap
+    of either branch changes sign between two platform angles of a fine
+    turn (a tangential closure is missed)."""
+    gaps = _closure_gaps(mechanism, th, np.linspace(-math.pi, math.pi, alphas))
+    crossing = gaps[..., :-1] * gaps[..., 1:] <= 0
+    return crossing.any(axis=(0, 2))
+
+
+def _closes(mechanism, configuration):
+    """Whether joints and platform angle close the chains (to 1e-6)."""
+    gaps = _closure_gaps(mechanism, [configuration[:3]], [configuration[3]])
+    return bool(np.nanmin(np.abs(gaps)) < 1e-6)
+
+
+def test_a_file_without_a_home_finds_one_that_assembles_where_its_middle_cannot():
+    described = mechanism_file_from_dict({"mechanism": USER_RRR, "joints": TORUS})
+    assert described.home is None
+    assert not _assemblable(USER_RRR, [[0.0, 0.0, 0.0]])[0]
+    home = described.default_home()
+    assert len(home) == 4 and all(-math.pi <= v <= math.pi for v in home[:3])
+    assert _closes(USER_RRR, home)
+    # Its first joint's value is that of the lattice's slice with most
+    # configurations the reference can assemble.
+    values = -math.pi + (np.arange(HOME_SAMPLES) + 0.5) * 2 * math.pi / HOME_SAMPLES
+    lattice = np.stack(np.meshgrid(values, values, values, indexing="ij"), -1).reshape(-1, 3)
+    counts = _assemblable(USER_RRR, lattice).reshape(HOME_SAMPLES, -1).sum(axis=1)
+    assert counts.max() > 0
+    assert counts[int(np.argmin(np.abs(values - home[0])))] == counts.max()
+
+
+def test_a_file_s_home_is_where_its_nodes_start():
+    home = [0.0, 1.2043, 2.2515, 0.6526]
+    described = mechanism_file_from_dict({"mechanism": DEFAULT_THREE_RRR.to_dict(),
+                                          "joints": TORUS, "home": home})
+    assert described.default_home() == tuple(home)
+    for path in (PAPER, FIVE_BAR, THREE_RRR):
+        assert load_mechanism_file(path).home is not None
+
+
+@pytest.mark.parametrize("home, reason", [
+    ([0.0, 0.0], "lists 3 numbers"),
+    ([0.0, "a", 0.1], "lists 3 numbers"),
+    ([0.0, True, 0.1], "lists 3 numbers"),
+    ([0.0, math.nan, 0.1], "NaN"),
+    ([0.0, 2.0, 0.1], "outside its range"),
+    ([0.0, 0.0, 0.5], "no assembly mode with y near 0.5"),
+])
+def test_a_home_that_does_not_fit_the_file_is_refused(home, reason):
+    with pytest.raises(InvalidInputError, match=reason):
+        mechanism_file_from_dict(_document(home=home))
+
+
+def test_a_home_near_a_singularity_is_refused():
+    # B1 turned on leg 1's circle (rho1 = 17) until the leg lines concur.
+    alpha = 0.5
+    theta = brentq(lambda t: PAPER_GEOMETRY.margin([17 * math.cos(t), 17 * math.sin(t), alpha]),
+                   math.pi / 3, math.pi / 2)
+    legs = PAPER_GEOMETRY.inverse([17 * math.cos(theta), 17 * math.sin(theta), alpha])
+    document = {"mechanism": PAPER_GEOMETRY.to_dict(),
+                "joints": [{"name": n, "min": 0.0, "max": 50.0, "step": 0.125}
+                           for n in PAPER_GEOMETRY.joint_names],
+                "home": [*map(float, legs), alpha]}
+    with pytest.raises(InvalidInputError, match="too near a singularity"):
+        mechanism_file_from_dict(document)
 
 
 @pytest.mark.parametrize("fixed, reason", [

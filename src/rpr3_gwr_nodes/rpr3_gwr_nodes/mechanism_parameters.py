@@ -12,15 +12,17 @@ from rpr3_gwr_core.io.mechanism_file import load_mechanism_file, mechanism_file_
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID
 from rpr3_gwr_core.world import EMPTY_SCENE
 
-__all__ = ["declare_mechanism", "PAPER_MECHANISM_FILE", "box_middle", "kept_scene"]
+__all__ = ["declare_mechanism", "PAPER_MECHANISM_FILE", "home_source", "kept_scene"]
 
 # The paper's 3-RPR on its legs' box, every leg sampled as the paper's
-# slice samples rho2 and rho3 (config/paper_3rpr.yaml).
+# slice samples rho2 and rho3, at home in the paper's first example
+# (config/paper_3rpr.yaml).
 _LEGS = PAPER_GRID.axes[0]
 PAPER_MECHANISM_FILE = mechanism_file_from_dict({
     "mechanism": PAPER_GEOMETRY.to_dict(),
     "joints": [{"name": name, "min": _LEGS.low, "max": _LEGS.high, "step": _LEGS.step}
-               for name in PAPER_GEOMETRY.joint_names]})
+               for name in PAPER_GEOMETRY.joint_names],
+    "home": [17.0, 12.0, 18.0, math.radians(122.82)]})
 
 
 def declare_mechanism(node):
@@ -42,11 +44,12 @@ def declare_mechanism(node):
     return load_mechanism_file(path) if path else PAPER_MECHANISM_FILE
 
 
-def box_middle(axis):
-    """The grid value of an axis nearest its middle (0 for a full turn)."""
-    if axis.periodic:
-        return 0.0
-    return axis.low + axis.step * math.floor((axis.high - axis.low) / (2 * axis.step))
+def home_source(described):
+    """Where a mechanism file's default home comes from, for the log."""
+    if described.home is not None:
+        return "the mechanism file's home"
+    return ("the file has no home: the assembly mode of largest margin on the slice of "
+            "its first joint with most configurations that can be assembled")
 
 
 def kept_scene(scene, bodies):

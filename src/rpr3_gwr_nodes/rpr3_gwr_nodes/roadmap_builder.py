@@ -54,7 +54,7 @@ from visualization_msgs.msg import MarkerArray
 
 from .conversions import roadmap_to_msgs
 from .core_threads import core_threads
-from .mechanism_parameters import box_middle, declare_mechanism
+from .mechanism_parameters import declare_mechanism, home_source
 from .memory import release_free_memory, use_one_arena
 from .profiles import BASE_FRAME, LATCHED_QOS
 from .spin import run
@@ -83,7 +83,6 @@ _GRID_PARAMETERS = ("fixed_value", "ranges", "step", "full")
 # Within a stage of a build, the log says where it stands this often [s].
 _PROGRESS_PERIOD = 2.0
 # The paper's slice: rho1 = 17.
-_PAPER_RHO1 = 17.0
 
 
 class RoadmapBuilder(Node):
@@ -94,14 +93,17 @@ class RoadmapBuilder(Node):
         self.described = declare_mechanism(self)
         self.mechanism = self.described.mechanism
         first = self.mechanism.joint_names[0]
+        home = self.described.default_home()
         self.declare_parameter(
-            "fixed_value", _PAPER_RHO1 if self.mechanism == PAPER_GEOMETRY
-            else box_middle(self.described.axes[0]),
+            "fixed_value", home[0],
             ParameterDescriptor(description=f"Value at which the slice fixes the mechanism's "
                                             f"first joint, {first}, within the file's box; by "
-                                            "default the paper's rho1 = 17 for the paper's "
-                                            "3-RPR, else the middle of the box (0 for a joint "
-                                            "that turns fully) [joint unit]"))
+                                            "default the home's (the mechanism file's home, "
+                                            "else the one found for it; the paper's rho1 = 17) "
+                                            "[joint unit]"))
+        if self.get_parameter("fixed_value").value == home[0]:
+            self.get_logger().info(
+                f"slice at {first} = {home[0]:g}, from {home_source(self.described)}")
         self.declare_parameter("ranges", None, ParameterDescriptor(
             description="[min, max] of each free joint in order, within the file's box; "
                         "empty for the box (a joint that turns fully: its whole turn) "

@@ -78,7 +78,6 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rpr3_gwr_core.exceptions import GWRError, InvalidInputError
 from rpr3_gwr_core.mechanisms.continuation import CANNOT_FOLLOW, CROSSED, follow_path
-from rpr3_gwr_core.paper import PAPER_GEOMETRY
 from rpr3_gwr_core.planning import DEFAULT_MAX_STEP
 from rpr3_gwr_core.planning.locate import DEFAULT_MODE_TOL
 from rpr3_gwr_core.world import configuration_collision, path_collisions
@@ -92,7 +91,7 @@ from visualization_msgs.msg import MarkerArray
 
 from .conversions import (configuration_from_msg, duration_msg, is_empty_scene, pose_msg,
                           scene_from_msg, scene_to_msg)
-from .mechanism_parameters import box_middle, declare_mechanism, kept_scene
+from .mechanism_parameters import declare_mechanism, home_source, kept_scene
 from .profiles import BASE_FRAME, LATCHED_QOS, STATE_QOS
 from .spin import run
 from .visualization import mechanism_markers, scene_markers
@@ -120,8 +119,6 @@ Example     ros2 run rpr3_gwr_nodes rpr3_driver --ros-args -p time_scale:=10.0
 
 _Result = ExecuteTrajectory.Result
 _Reset = ResetDriver.Response
-# The paper's first example, where the paper's 3-RPR starts.
-_PAPER_START = [17.0, 12.0, 18.0, math.radians(122.82)]
 
 
 def _seconds(duration):
@@ -185,14 +182,13 @@ class Rpr3Driver(Node):
         self.limits = [None if a.periodic else (a.low, a.high) for a in described.axes]
         self._periodic = np.array([a.periodic for a in described.axes])
         self.declare_parameter(
-            "initial_configuration",
-            _PAPER_START if self.mechanism == PAPER_GEOMETRY else Parameter.Type.DOUBLE_ARRAY,
+            "initial_configuration", Parameter.Type.DOUBLE_ARRAY,
             ParameterDescriptor(
                 description=f"Initial joints ({', '.join(names)}) then mode coordinate "
                             f"{self.mechanism.pose_names[self.mechanism.mode_coordinate]} "
-                            "[joint unit, mode unit]; by default the paper's first example "
-                            "for the paper's 3-RPR, else the middle of the box in its assembly "
-                            "mode of largest margin", read_only=True))
+                            "[joint unit, mode unit]; by default the mechanism file's home, "
+                            "else the one found for it (the paper's first example for the "
+                            "paper's 3-RPR)", read_only=True))
         self._lock = threading.Lock()
         self._active = False  # a goal is accepted or executing (under _lock)
         self._holding = ""  # why the driver holds after an abort, "" when it does not
@@ -204,11 +200,13 @@ class Rpr3Driver(Node):
         self._collision = None
         # Scene messages refused (unreadable, or naming unknown joints).
         self.refused_scenes = 0
-        # Not given for a mechanism other than the paper's: unset.
+        # Unset unless given.
         initial = self.get_parameter_or("initial_configuration",
                                         Parameter("initial_configuration")).value
-        self.rho, self.pose, self.margin = self._assembly(
-            self._box_middle(described.axes) if initial is None else initial)
+        if initial is None:
+            initial = described.default_home()
+            self.get_logger().info(f"starting at {home_source(described)}")
+        self.rho, self.pose, self.margin = self._assembly(initial)
         self.velocity = np.zeros(len(names))
         self.joint_pub = self.create_publisher(JointState, "joint_states", STATE_QOS)
         self.pose_pub = self.create_publisher(PlatformPose, "platform_pose", STATE_QOS)
@@ -240,16 +238,6 @@ class Rpr3Driver(Node):
         """The direct-kinematic solutions of joints, shape (count, pose_size)."""
         count, poses = self.mechanism.solve(np.asarray(joints, dtype=float)[None])
         return poses[0, :count[0]]
-
-    def _box_middle(self, axes):
-        """The middle of the box in its assembly mode of largest margin."""
-        joints = [box_middle(a) for a in axes]
-        poses = self._solutions(joints)
-        if not len(poses):
-            raise InvalidInputError(f"the middle of the box, {joints}, has no direct-kinematic "
-                                    "solution: give initial_configuration")
-        margins = np.abs(self.mechanism.margin(poses, np.array(joints)))
-        return [*joints, float(poses[int(np.argmax(margins)), self.mechanism.mode_coordinate])]
 
     def _assembly(self, configuration):
         """Joints, pose and margin of the assembly mode nearest the mode

@@ -11,22 +11,35 @@ writes them; lengths in the mechanism's length unit, angles in radians).
 ``-pi``.  An optional ``bodies`` key gives the widths and layers of its
 bodies against obstacles and each other (:class:`~rpr3_gwr_core.world.BodyModel`:
 ``leg_width``, ``leg_layers``, ``platform_width``, ...; by default each leg
-in a layer of its own, so legs never meet).  ``config/`` holds one file per
-mechanism the suite knows.
+in a layer of its own, so legs never meet).  An optional ``home`` is the
+configuration the nodes start at: the joints, then the mode coordinate of
+its assembly mode (``[rho1, rho2, rho3, alpha]`` for the 3-RPR), in the
+box and off the singular locus.  ``config/`` holds one file per mechanism
+the suite knows.
 """
 
 from dataclasses import dataclass
 import math
 
+import numpy as np
+
 from ..exceptions import InvalidInputError
 from ..mechanisms import Mechanism, mechanism_from_dict
+from ..planning.locate import DEFAULT_MODE_TOL
 from ..workspace.grid import Axis, Grid
 
 __all__ = ["MechanismFile", "load_mechanism_file", "mechanism_file_from_dict", "roadmap_grid",
-           "UNIFORM_CELLS"]
+           "UNIFORM_CELLS", "HOME_SAMPLES", "HOME_MIN_MARGIN"]
 
 UNIFORM_CELLS = 1_000_000
 """Largest box of all the joints built as a uniform grid [cells]."""
+
+HOME_SAMPLES = 12
+"""Values of each joint on the lattice a home is looked for on, when a file
+gives none: the middles of as many equal parts of the joint's range."""
+
+HOME_MIN_MARGIN = 0.01
+"""Smallest margin magnitude of a home, given or found."""
 
 
 @dataclass(frozen=True, repr=False)
@@ -40,18 +53,51 @@ class MechanismFile:
         One per joint, in the mechanism's joint order.
     bodies : BodyModel or None
         The file's ``bodies``, None without one (the defaults).
+    home : tuple of float or None
+        The file's ``home``, shape (n_joints + 1,): the joints [joint unit],
+        then the mode coordinate; None without one.
     """
 
     mechanism: Mechanism
     axes: tuple
     bodies: object = None
+    home: tuple = None
 
     def __repr__(self):
         box = " x ".join(f"{name} ({a.count} cells a turn)" if a.periodic
                          else f"{name} [{a.low:g}, {a.high:g}] step {a.step:g}"
                          for name, a in zip(self.mechanism.joint_names, self.axes))
         return (f"MechanismFile({self.mechanism.kind}: {box}; "
-                f"{'default bodies' if self.bodies is None else 'bodies of its own'})")
+                f"{'default bodies' if self.bodies is None else 'bodies of its own'}"
+                f"{'' if self.home is None else '; a home'})")
+
+    def default_home(self, samples=HOME_SAMPLES):
+        """The configuration to start at: the file's ``home``, else the
+        assembly mode of largest margin magnitude on the slice of the first
+        joint where a lattice of the box has most configurations that can
+        be assembled.
+
+        Parameters
+        ----------
+        samples : int
+            Values of each joint on the lattice (:data:`HOME_SAMPLES`).
+
+        Returns
+        -------
+        tuple of float, shape (n_joints + 1,)
+            The joints [joint unit], then the mode coordinate.
+
+        Raises
+        ------
+        InvalidInputError
+            If no configuration of the lattice can be assembled with a margin
+            of at least :data:`HOME_MIN_MARGIN`.
+        """
+        if self.home is not None:
+            return self.home
+        if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
+            raise InvalidInputError(f"samples is a whole number >= 1, not {samples!r}")
+        return _found_home(self.mechanism, self.axes, samples)
 
     def grid(self, fixed=None):
         """The grid over the box with some joints fixed.
@@ -140,9 +186,9 @@ def mechanism_file_from_dict(document):
         If it does not describe a mechanism and its box.
     """
     if not isinstance(document, dict) or not {"mechanism", "joints"} <= set(document) \
-            or not set(document) <= {"mechanism", "joints", "bodies"}:
+            or not set(document) <= {"mechanism", "joints", "bodies", "home"}:
         raise InvalidInputError("a mechanism file has the keys 'mechanism' and 'joints', "
-                                "and may have 'bodies'")
+                                "and may have 'bodies' and 'home'")
     mechanism = mechanism_from_dict(document["mechanism"])
     joints = document["joints"]
     names = mechanism.joint_names
@@ -158,7 +204,72 @@ def mechanism_file_from_dict(document):
         from ..world import body_model_from_dict  # the world loads only when a file needs it
 
         bodies = body_model_from_dict(document["bodies"])
-    return MechanismFile(mechanism=mechanism, axes=tuple(axes), bodies=bodies)
+    home = _home(mechanism, axes, document["home"]) if "home" in document else None
+    return MechanismFile(mechanism=mechanism, axes=tuple(axes), bodies=bodies, home=home)
+
+
+def _home(mechanism, axes, values):
+    """The ``home`` of a file, checked: in the box, and an assembly mode
+    within ``DEFAULT_MODE_TOL`` (or 1e-6 of a length) of its mode
+    coordinate, of margin at least :data:`HOME_MIN_MARGIN`."""
+    size = mechanism.n_joints + 1
+    names = (*mechanism.joint_names, mechanism.pose_names[mechanism.mode_coordinate])
+    if (not isinstance(values, list) or len(values) != size
+            or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in values)):
+        raise InvalidInputError(f"'home' lists {size} numbers, {list(names)}")
+    home = tuple(float(v) for v in values)
+    if not all(math.isfinite(v) for v in home):
+        raise InvalidInputError(f"'home' has NaN or infinity: {list(home)}")
+    for name, value, axis in zip(names, home, axes):
+        if not axis.periodic and not axis.low <= value <= axis.high:
+            raise InvalidInputError(f"'home': {name} = {value:g} lies outside its range "
+                                    f"[{axis.low:g}, {axis.high:g}]")
+    joints = np.array(home[:-1])
+    poses = _solutions(mechanism, joints[None])[0]
+    k = mechanism.mode_coordinate
+    off = np.abs(poses[:, k] - home[-1])
+    if mechanism.angular[k]:
+        off = np.abs(np.remainder(poses[:, k] - home[-1] + math.pi, 2 * math.pi) - math.pi)
+    if not len(poses) or off.min() > (DEFAULT_MODE_TOL if mechanism.angular[k] else 1e-6):
+        modes = ", ".join(f"{v:.6g}" for v in poses[:, k]) or "none"
+        raise InvalidInputError(f"'home': the joints {list(home[:-1])} have no assembly mode "
+                                f"with {names[-1]} near {home[-1]:g} (theirs: {modes})")
+    margin = abs(float(mechanism.margin(poses[np.argmin(off)], joints)))
+    if margin < HOME_MIN_MARGIN:
+        raise InvalidInputError(f"'home' lies too near a singularity: margin {margin:.3g} "
+                                f"< {HOME_MIN_MARGIN:g}")
+    return home
+
+
+def _solutions(mechanism, joints):
+    """The direct-kinematic solutions of rows of joints: a list of arrays of
+    shape (count, pose_size)."""
+    count, poses = mechanism.solve(joints)
+    return [row[:n] for row, n in zip(poses, count)]
+
+
+def _found_home(mechanism, axes, samples):
+    """The lattice configuration of :meth:`MechanismFile.default_home`."""
+    values = [(-math.pi + (np.arange(samples) + 0.5) * 2 * math.pi / samples) if a.periodic
+              else a.low + (np.arange(samples) + 0.5) * (a.high - a.low) / samples
+              for a in axes]
+    lattice = np.stack(np.meshgrid(*values, indexing="ij"), axis=-1).reshape(-1, len(axes))
+    solutions = _solutions(mechanism, lattice)
+    margins = [np.abs(mechanism.margin(poses, joints)) if len(poses) else np.zeros(0)
+               for poses, joints in zip(solutions, lattice)]
+    kept = np.array([bool((m >= HOME_MIN_MARGIN).any()) for m in margins])
+    per_slice = kept.reshape(samples, -1).sum(axis=1)
+    if per_slice.max() == 0:
+        raise InvalidInputError(
+            f"no configuration of a lattice of {samples} values a joint over the box can be "
+            f"assembled with a margin of {HOME_MIN_MARGIN:g} or more: give the file a 'home'")
+    # Of the slices with most, the one nearest the middle of the first joint.
+    best = max(range(samples), key=lambda k: (per_slice[k], -abs(k - (samples - 1) / 2)))
+    per_value = len(lattice) // samples
+    rows = [r for r in range(best * per_value, (best + 1) * per_value) if kept[r]]
+    row = max(rows, key=lambda r: margins[r].max())
+    pose = solutions[row][int(np.argmax(margins[row]))]
+    return (*(float(v) for v in lattice[row]), float(pose[mechanism.mode_coordinate]))
 
 
 def _axis(k, joint):
