@@ -89,6 +89,70 @@ def test_malformed_documents_are_refused(document, reason):
         mechanism_file_from_dict(document)
 
 
+def _user_rpr(**changes):
+    """A user's 3-RPR: A1 (0, 0), A2 (20, 0), A3 (5, 15), d1 10, d3 12, beta
+    60 deg, legs in [5, 30]."""
+    mechanism = {"kind": "3-RPR", "a1": [0.0, 0.0], "a2": [20.0, 0.0], "a3": [5.0, 15.0],
+                 "d1": 10.0, "d3": 12.0, "beta_deg": 60}
+    mechanism.update(changes)
+    return {"mechanism": {k: v for k, v in mechanism.items() if v is not None},
+            "joints": [{"name": n, "min": 5.0, "max": 30.0, "step": 0.125}
+                       for n in ("rho1", "rho2", "rho3")]}
+
+
+def test_an_angle_in_degrees_carries_its_unit_in_its_key():
+    in_degrees = mechanism_file_from_dict(_user_rpr()).mechanism
+    in_radians = mechanism_file_from_dict(_user_rpr(beta_deg=None, beta=math.pi / 3)).mechanism
+    assert in_degrees == in_radians
+    assert in_degrees.beta == pytest.approx(math.pi / 3, abs=1e-15)
+    prr = {"kind": "3-PRR", "a1": [0.0, 0.0], "a2": [15.91, 0.0], "a3": [0.0, 10.0],
+           "gamma1_deg": 0, "gamma2_deg": 90, "gamma3_deg": 45, "l": 15.0, "d1": 17.04,
+           "d3": 20.84, "beta": 0.8826031097644318}
+    joints = [{"name": n, "min": 0.0, "max": 30.0, "step": 0.25} for n in ("s1", "s2", "s3")]
+    described = mechanism_file_from_dict({"mechanism": prr, "joints": joints})
+    assert described.mechanism == load_mechanism_file(str(CONFIG / "three_prr.yaml")).mechanism
+
+
+def test_a_revolute_joint_s_range_may_be_in_degrees():
+    in_degrees = mechanism_file_from_dict(_document(joints=[
+        {"name": "th1", "periodic": True, "cells": 120},
+        {"name": "th2", "min_deg": -45, "max_deg": 45, "step_deg": 0.5}]))
+    axis = in_degrees.axes[1]
+    assert (axis.low, axis.high, axis.step) == pytest.approx(
+        (-math.pi / 4, math.pi / 4, math.pi / 360), abs=1e-15)
+
+
+@pytest.mark.parametrize("document, reason", [
+    (_user_rpr(beta_deg=None, beta=60),
+     r"beta = 60 rad is more than a full turn: a mechanism file's angles are in radians; "
+     r"for degrees, name the key with _deg"),
+    (_user_rpr(d3=None, d_3=12.0),
+     r"unknown key 'd_3'; the known: a1, a2, a3, d1, d3, beta \[rad\] or beta_deg \[deg\]"),
+    (_user_rpr(beta=1.0), r"beta is given twice, as beta \[rad\] and beta_deg \[deg\]"),
+    (_user_rpr(d3=None), r"'d3' missing"),
+    (_user_rpr(beta_deg="60"), r"beta_deg must be a number of degrees"),
+    (_document(joints=[{"name": "th1", "periodic": True, "cells": 120},
+                       {"name": "th2", "min": -60, "max": 60, "step": 1}]),
+     r"th2: min = -60 rad is more than a full turn"),
+    (_document(joints=[{"name": "th1", "periodic": True, "cells": 120},
+                       {"name": "th2", "min": -1, "max": 1, "step_size": 0.1}]),
+     r"th2: unknown key 'step_size'; the known: min \[rad\] or min_deg \[deg\]"),
+    (_document(home=[0.0, 0.0, 0.1], joints=[{"name": "th1", "periodic": True, "cells": 120},
+                                             {"name": "th2", "min": -1, "max": 1, "step": 0.1}])
+     | {"home": [90.0, 0.0, 0.1]}, r"'home': th1 = 90 rad is more than a full turn"),
+])
+def test_a_file_that_could_be_misread_is_refused_with_the_reason(document, reason):
+    with pytest.raises(InvalidInputError, match=reason):
+        mechanism_file_from_dict(document)
+
+
+def test_a_range_error_names_the_unit():
+    with pytest.raises(InvalidInputError, match=r"th2 = 2.0 lies outside .* \[-1, 1\] rad$"):
+        mechanism_file_from_dict(_document()).grid({"th2": 2.0})
+    with pytest.raises(InvalidInputError, match=r"\[0, 50\] \[length unit\]$"):
+        load_mechanism_file(PAPER).grid({"rho1": 60.0})
+
+
 def test_a_file_may_put_the_legs_in_one_layer():
     described = mechanism_file_from_dict(_document(bodies={"leg_layers": [1, 1]}))
     assert described.bodies.leg_layers == (1, 1)

@@ -8,7 +8,11 @@ writes them; lengths in the mechanism's length unit, angles in radians).
 ``name`` (the mechanism's joint name) and either a range sampled by a step
 (``min``, ``max``, ``step``) or, for a revolute joint that turns freely,
 ``periodic: true`` with the number of ``cells`` of its full turn, starting at
-``-pi``.  An optional ``bodies`` key gives the widths and layers of its
+``-pi``.  Angles are in radians; an angle parameter or a revolute joint's
+``min``, ``max`` and ``step`` may be given in degrees instead, as the same
+key ending in ``_deg`` (``beta_deg: 60``).  A bare angle beyond a full turn
+is refused as a likely angle in degrees, and an unknown key is named with
+the known ones.  An optional ``bodies`` key gives the widths and layers of its
 bodies against obstacles and each other (:class:`~rpr3_gwr_core.world.BodyModel`:
 ``leg_width``, ``leg_layers``, ``platform_width``, ...; by default each leg
 in a layer of its own, so legs never meet).  An optional ``home`` is the
@@ -20,11 +24,12 @@ the suite knows.
 
 from dataclasses import dataclass
 import math
+import numbers
 
 import numpy as np
 
 from ..exceptions import InvalidInputError
-from ..mechanisms import Mechanism, mechanism_from_dict
+from ..mechanisms import Mechanism, mechanism_class, mechanism_from_dict
 from ..planning.locate import DEFAULT_MODE_TOL
 from ..workspace.grid import Axis, Grid
 
@@ -126,7 +131,8 @@ class MechanismFile:
             if not math.isfinite(value) or (
                     not axis.periodic and not axis.low <= value <= axis.high):
                 raise InvalidInputError(f"{name} = {value} lies outside its range "
-                                        f"[{axis.low:g}, {axis.high:g}]")
+                                        f"[{axis.low:g}, {axis.high:g}] "
+                                        f"{_unit(self.mechanism, name)}")
             values.append((names.index(name), value))
         axes = tuple(a for a, name in zip(self.axes, names) if name not in fixed)
         if not axes:
@@ -189,7 +195,7 @@ def mechanism_file_from_dict(document):
             or not set(document) <= {"mechanism", "joints", "bodies", "home"}:
         raise InvalidInputError("a mechanism file has the keys 'mechanism' and 'joints', "
                                 "and may have 'bodies' and 'home'")
-    mechanism = mechanism_from_dict(document["mechanism"])
+    mechanism = mechanism_from_dict(_in_radians(document["mechanism"]))
     joints = document["joints"]
     names = mechanism.joint_names
     if not isinstance(joints, list) or len(joints) != len(names):
@@ -198,7 +204,7 @@ def mechanism_file_from_dict(document):
     for k, (joint, name) in enumerate(zip(joints, names)):
         if not isinstance(joint, dict) or joint.get("name") != name:
             raise InvalidInputError(f"joint {k} of 'joints' must be named {name!r}")
-        axes.append(_axis(k, joint))
+        axes.append(_axis(k, joint, mechanism.angular_joints[k]))
     bodies = None
     if "bodies" in document:
         from ..world import body_model_from_dict  # the world loads only when a file needs it
@@ -220,10 +226,14 @@ def _home(mechanism, axes, values):
     home = tuple(float(v) for v in values)
     if not all(math.isfinite(v) for v in home):
         raise InvalidInputError(f"'home' has NaN or infinity: {list(home)}")
+    angles = (*mechanism.angular_joints, mechanism.angular[mechanism.mode_coordinate])
+    for name, value, angle in zip(names, home, angles):
+        if angle:
+            _radians(f"'home': {name}", value)
     for name, value, axis in zip(names, home, axes):
         if not axis.periodic and not axis.low <= value <= axis.high:
             raise InvalidInputError(f"'home': {name} = {value:g} lies outside its range "
-                                    f"[{axis.low:g}, {axis.high:g}]")
+                                    f"[{axis.low:g}, {axis.high:g}] {_unit(mechanism, name)}")
     joints = np.array(home[:-1])
     poses = _solutions(mechanism, joints[None])[0]
     k = mechanism.mode_coordinate
@@ -272,18 +282,86 @@ def _found_home(mechanism, axes, samples):
     return (*(float(v) for v in lattice[row]), float(pose[mechanism.mode_coordinate]))
 
 
-def _axis(k, joint):
-    keys = set(joint) - {"name"}
+def _unit(mechanism, joint_name):
+    """The unit of a joint's values, as errors name it."""
+    angular = mechanism.angular_joints[mechanism.joint_names.index(joint_name)]
+    return "rad" if angular else "[length unit]"
+
+
+def _radians(what, value, degrees=False):
+    """An angle of a file in radians: ``value`` in degrees when ``degrees``,
+    else in radians and at most a full turn."""
+    unit = "degrees" if degrees else "radians"
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+            or not math.isfinite(value):
+        raise InvalidInputError(f"{what} must be a number of {unit}, finite, got {value!r}")
+    if degrees:
+        return math.radians(value)
+    if abs(value) > 2 * math.pi:
+        raise InvalidInputError(
+            f"{what} = {value:g} rad is more than a full turn: a mechanism file's angles are "
+            f"in radians; for degrees, name the key with _deg ({value:g} deg = "
+            f"{math.radians(value):.6g} rad)")
+    return float(value)
+
+
+def _converted(what, mapping, names, angles):
+    """A mapping's values by name with its angles in radians: a key
+    ``NAME_deg`` of an angle gives NAME in degrees.  Unknown keys are
+    refused, named with the known ones; missing ones are not checked."""
+    converted, unknown = {}, []
+    for key, value in mapping.items():
+        degrees = isinstance(key, str) and key.endswith("_deg") and key[:-4] in angles
+        name = key[:-4] if degrees else key
+        if name not in names:
+            unknown.append(key)
+        elif name in converted:
+            raise InvalidInputError(f"{what}: {name} is given twice, as {name} [rad] and "
+                                    f"{name}_deg [deg]")
+        else:
+            converted[name] = _radians(f"{what}: {key}", value, degrees) if name in angles \
+                else value
+    if unknown:
+        known = ", ".join(f"{n} [rad] or {n}_deg [deg]" if n in angles else n for n in names)
+        raise InvalidInputError(f"{what}: unknown key{'s' if len(unknown) > 1 else ''} "
+                                f"{', '.join(map(repr, unknown))}; the known: {known}")
+    return converted
+
+
+def _in_radians(document):
+    """The ``mechanism`` mapping of a file as :func:`mechanism_from_dict`
+    takes it: its angle parameters in radians."""
+    if not isinstance(document, dict):
+        raise InvalidInputError("'mechanism' is a mapping: the mechanism's 'kind' and "
+                                "parameters")
+    cls = mechanism_class(document.get("kind"))
+    what = f"the {cls.kind}'s parameters"
+    parameters = _converted(what, {k: v for k, v in document.items() if k != "kind"},
+                            cls.parameter_names(), cls.angle_parameters)
+    missing = [name for name in cls.parameter_names() if name not in parameters]
+    if missing:
+        raise InvalidInputError(f"{what}: {', '.join(map(repr, missing))} missing")
+    return {"kind": cls.kind, **parameters}
+
+
+def _axis(k, joint, angular):
+    name = joint["name"]
+    keys = {key: value for key, value in joint.items() if key != "name"}
+    periodic = keys.get("periodic") is True and set(keys) == {"periodic", "cells"}
+    if not periodic:
+        keys = _converted(name, keys, ("min", "max", "step", "periodic", "cells"),
+                          ("min", "max", "step") if angular else ())
     try:
-        if joint.get("periodic") is True and keys == {"periodic", "cells"}:
-            cells = joint["cells"]
+        if periodic:
+            cells = keys["cells"]
             if isinstance(cells, bool) or not isinstance(cells, int) or cells < 2:
-                raise InvalidInputError(f"{joint['name']}: 'cells' is a whole number >= 2")
+                raise InvalidInputError(f"{name}: 'cells' is a whole number >= 2")
             step = 2 * math.pi / cells
             return Axis(k, -math.pi, math.pi - step, step, periodic=True)
-        if keys == {"min", "max", "step"}:
-            return Axis(k, joint["min"], joint["max"], joint["step"])
+        if set(keys) == {"min", "max", "step"}:
+            return Axis(k, keys["min"], keys["max"], keys["step"])
     except TypeError as exc:
-        raise InvalidInputError(f"{joint['name']}: {exc}") from None
-    raise InvalidInputError(f"{joint['name']}: give 'min', 'max' and 'step', or "
+        raise InvalidInputError(f"{name}: {exc}") from None
+    unit = "rad (or min_deg, max_deg and step_deg)" if angular else "[length unit]"
+    raise InvalidInputError(f"{name}: give 'min', 'max' and 'step' {unit}, or "
                             "'periodic: true' and 'cells'")

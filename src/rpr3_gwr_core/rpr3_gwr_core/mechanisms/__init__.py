@@ -19,7 +19,24 @@ _MODULES = {
 _MODULE_OF_NAME = {name: module for module, (_, names) in _MODULES.items() for name in names}
 _MODULE_OF_KIND = {kind: module for module, (kind, _) in _MODULES.items()}
 
-__all__ = ["Mechanism", "mechanism_from_dict", "register_mechanism", *_MODULE_OF_NAME]
+__all__ = ["Mechanism", "mechanism_class", "mechanism_from_dict", "register_mechanism",
+           *_MODULE_OF_NAME]
+
+
+def mechanism_class(kind):
+    """The class of a mechanism kind (:func:`.base.mechanism_class`), its
+    module loaded first.
+
+    Raises
+    ------
+    InvalidInputError
+        If the kind is unknown.
+    """
+    # An unknown kind loads them all, so that the error lists every kind.
+    known = isinstance(kind, str) and kind in _MODULE_OF_KIND
+    for module in [_MODULE_OF_KIND[kind]] if known else _MODULES:
+        importlib.import_module(module, __name__)
+    return base.mechanism_class(kind)
 
 
 def mechanism_from_dict(data):
@@ -32,10 +49,7 @@ def mechanism_from_dict(data):
         If the data names no known kind or its parameters are invalid.
     """
     kind = data.get("kind") if isinstance(data, dict) else None
-    # An unknown kind loads them all, so that the error lists every kind.
-    for module in [_MODULE_OF_KIND[kind]] if kind in _MODULE_OF_KIND else _MODULES:
-        importlib.import_module(module, __name__)
-    return base.mechanism_from_dict(data)
+    return mechanism_class(kind).from_dict(data)
 
 
 __getattr__, __dir__ = lazy_exports(__name__, globals(), _MODULE_OF_NAME)

@@ -18,6 +18,7 @@ in one compiled loop.
 """
 
 import abc
+import dataclasses
 import math
 import numbers
 
@@ -30,8 +31,9 @@ from ..exceptions import InvalidInputError
 from ..world.bodies import assemble_bodies
 from .continuation import STEP_KERNEL_SIGNATURE
 
-__all__ = ["Mechanism", "mechanism_from_dict", "register_mechanism", "STEP_KERNEL_SIGNATURE",
-           "PREDICT_KERNEL_SIGNATURE", "first_class", "positive_length", "finite_vectors"]
+__all__ = ["Mechanism", "mechanism_class", "mechanism_from_dict", "register_mechanism",
+           "STEP_KERNEL_SIGNATURE", "PREDICT_KERNEL_SIGNATURE", "first_class",
+           "positive_length", "finite_vectors"]
 
 # ``kernel(parameters, poses, joints_from, joints_to, out)``: the Euler
 # predictor of :meth:`Mechanism.predict` for the rows of ``poses`` (k,
@@ -53,6 +55,19 @@ def register_mechanism(kind):
     return register
 
 
+def mechanism_class(kind):
+    """The registered class of a mechanism kind.
+
+    Raises
+    ------
+    InvalidInputError
+        If the kind is unknown.
+    """
+    if not isinstance(kind, str) or kind not in _REGISTRY:
+        raise InvalidInputError(f"unknown mechanism kind {kind!r}; known: {sorted(_REGISTRY)}")
+    return _REGISTRY[kind]
+
+
 def mechanism_from_dict(data):
     """Rebuild a mechanism from :meth:`Mechanism.to_dict`'s plain data.
 
@@ -62,9 +77,7 @@ def mechanism_from_dict(data):
         If the kind is unknown or its parameters malformed.
     """
     kind = data.get("kind") if isinstance(data, dict) else None
-    if kind not in _REGISTRY:
-        raise InvalidInputError(f"unknown mechanism kind {kind!r}; known: {sorted(_REGISTRY)}")
-    return _REGISTRY[kind].from_dict(data)
+    return mechanism_class(kind).from_dict(data)
 
 
 def first_class(dispatcher, signature):
@@ -128,6 +141,8 @@ class Mechanism(abc.ABC):
         Most direct-kinematic solutions of one joint vector.
     scale : float
         Length that makes angles commensurable with positions [length unit].
+    angle_parameters : tuple of str
+        The parameters of :meth:`to_dict` that are angles [rad].
     """
 
     kind = "abstract"
@@ -136,6 +151,13 @@ class Mechanism(abc.ABC):
     angular = ()
     mode_coordinate = 0
     max_solutions = 0
+    angle_parameters = ()
+
+    @classmethod
+    def parameter_names(cls):
+        """The parameters of :meth:`to_dict` beside ``kind``, in order: a
+        dataclass mechanism's fields (another kind overrides this)."""
+        return tuple(field.name for field in dataclasses.fields(cls))
 
     @property
     def angular_joints(self):

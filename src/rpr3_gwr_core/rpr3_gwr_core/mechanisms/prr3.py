@@ -98,6 +98,7 @@ class ThreePRR(_MovingBaseRPR):
     beta: float = beta_from_sides(17.04, 16.54, 20.84)
 
     joint_names = ("s1", "s2", "s3")
+    angle_parameters = ("gamma1", "gamma2", "gamma3", "beta")
     _moving_points = ("slider joints C_i (the sliders, not the pose, place them on their "
                       "lines)")
 

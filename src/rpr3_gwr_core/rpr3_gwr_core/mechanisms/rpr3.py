@@ -131,6 +131,7 @@ class ThreeRPR(Mechanism):
     angular = (False, False, True)
     mode_coordinate = 2
     max_solutions = MAX_SOLUTIONS
+    angle_parameters = ("beta",)
 
     def __post_init__(self):
         for name in ("a1", "a2", "a3"):

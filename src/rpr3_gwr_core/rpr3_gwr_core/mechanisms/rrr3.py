@@ -86,6 +86,7 @@ class _MovingBaseRPR(Mechanism):
     angular = (False, False, True)
     mode_coordinate = 2
     max_solutions = MAX_SOLUTIONS
+    angle_parameters = ("beta",)
     _moving_points = "base points C_i"
     _POINTS = ("a1", "a2", "a3")
 
