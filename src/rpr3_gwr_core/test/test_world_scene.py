@@ -1,5 +1,6 @@
 """Scenes, body models and the bodies of every mechanism."""
 
+import math
 import pathlib
 
 import numpy as np
@@ -53,6 +54,29 @@ def test_scene_files_load_and_round_trip():
 def test_malformed_scenes_are_refused(data, words):
     with pytest.raises(InvalidInputError) as error:
         scene_from_dict(data)
+    assert words in str(error.value)
+
+
+def test_passive_ranges_in_degrees_carry_their_unit_in_the_key():
+    in_degrees = scene_from_dict({"limits": {"passive_deg": {"base1": [-30, 150]}}})
+    in_radians = scene_from_dict({"limits": {"passive": {"base1": [-math.pi / 6,
+                                                                   5 * math.pi / 6]}}})
+    assert in_degrees.limits.passive["base1"] == pytest.approx(
+        in_radians.limits.passive["base1"], abs=1e-15)
+
+
+@pytest.mark.parametrize("limits, words", [
+    ({"passive": {"base1": [-30, 150]}},
+     "passive 'base1' [-30.0, 150.0] rad lies beyond a full turn: a scene's passive ranges "
+     "are in radians; give degrees under passive_deg"),
+    ({"passive": {"base1": [-3.5, 3.5]}}, "spans more than a full turn (7 rad)"),
+    ({"passive_deg": {"base1": [0, 400]}}, "spans more than a full turn (400 deg)"),
+    ({"passive": {"base1": [0, 1]}, "passive_deg": {"base1": [0, 50]}},
+     "give the passive ranges once"),
+])
+def test_a_passive_range_that_could_be_misread_is_refused_with_its_unit(limits, words):
+    with pytest.raises(InvalidInputError) as error:
+        scene_from_dict({"limits": limits})
     assert words in str(error.value)
 
 

@@ -16,6 +16,9 @@ A scene document (YAML or JSON)::
       obstacle_clearance: 0.25            # [length unit]
       strokes: {rho2: [2.0, 45.0]}        # [joint unit], by joint name
       passive: {base1: [0.0, 3.2]}        # [rad], min to max counter-clockwise
+
+``passive_deg`` gives the passive ranges in degrees instead; a bound of
+``passive`` beyond a full turn is refused as likely in degrees.
 """
 
 from dataclasses import dataclass, field
@@ -193,12 +196,12 @@ def scene_from_dict(data):
             discs.append(DiscObstacle(oid, center, radius))
     limits = data.get("limits")
     limits = {} if limits is None else limits
-    _keys(limits, "limits", {"strokes", "passive", "obstacle_clearance"})
+    _keys(limits, "limits", {"strokes", "passive", "passive_deg", "obstacle_clearance"})
     clearance = _number(limits.get("obstacle_clearance", 0.0), "obstacle_clearance")
     if clearance < 0:
         raise InvalidInputError(f"obstacle_clearance must be non-negative, got {clearance}")
-    strokes = _ranges(limits.get("strokes"), "strokes", None)
-    passive = _ranges(limits.get("passive"), "passive", 2 * math.pi)
+    strokes = _ranges(limits.get("strokes"), "strokes")
+    passive = _passive_ranges(limits)
     return Scene(polygons=tuple(polygons), discs=tuple(discs),
                  limits=Limits(strokes=strokes, passive=passive, obstacle_clearance=clearance))
 
@@ -282,7 +285,31 @@ def _segments_cross(p, q, r, s):
     return side(p, q, r) * side(p, q, s) <= 0 and side(r, s, p) * side(r, s, q) <= 0
 
 
-def _ranges(value, where, widest):
+def _passive_ranges(limits):
+    """The passive ranges [rad] of a scene's limits, from ``passive`` [rad]
+    or ``passive_deg`` [deg]."""
+    if "passive" in limits and "passive_deg" in limits:
+        raise InvalidInputError("limits give passive and passive_deg: give the passive "
+                                "ranges once, in radians or in degrees")
+    degrees = "passive_deg" in limits
+    where, unit, turn = ("passive_deg", "deg", 360.0) if degrees else ("passive", "rad",
+                                                                      2 * math.pi)
+    ranges = _ranges(limits.get(where), where)
+    for name, (low, high) in ranges.items():
+        if not degrees and max(abs(low), abs(high)) > turn:
+            raise InvalidInputError(
+                f"passive {name!r} {[low, high]} rad lies beyond a full turn: a scene's "
+                "passive ranges are in radians; give degrees under passive_deg")
+        if high - low > turn:
+            raise InvalidInputError(f"{where} {name!r} spans more than a full turn "
+                                    f"({high - low:g} {unit})")
+    if degrees:
+        return {name: (math.radians(low), math.radians(high))
+                for name, (low, high) in ranges.items()}
+    return ranges
+
+
+def _ranges(value, where):
     if value is None:
         return {}
     if not isinstance(value, dict):
@@ -294,7 +321,5 @@ def _ranges(value, where, widest):
         low, high = (_number(b, f"{where} {name!r}") for b in bounds)
         if low > high:
             raise InvalidInputError(f"{where} {name!r} has min {low} above max {high}")
-        if widest is not None and high - low > widest:
-            raise InvalidInputError(f"{where} {name!r} spans more than a full turn")
         out[str(name)] = (low, high)
     return out
