@@ -37,7 +37,7 @@ _SOURCES = {
     ".paper": ("PAPER_GEOMETRY", "PAPER_GRID", "rho1_slice"),
     ".workspace": ("Axis", "Grid", "compute_field", "build_roadmap", "Roadmap",
                    "aspect_groups"),
-    ".planning": ("Planner", "PlanOptions", "Plan", "Termination"),
+    ".planning": ("Planner", "PlanOptions", "Plan", "Termination", "assembly_modes"),
     ".exceptions": ("GWRError", "InvalidInputError", "OutOfGridError",
                     "FixedJointMismatchError", "NoSolutionError", "AssemblyModeError",
                     "SingularityError", "InfeasiblePathError", "CollisionError",

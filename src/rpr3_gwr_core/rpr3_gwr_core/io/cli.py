@@ -134,14 +134,25 @@ def _parser():
     def command(name, text):
         return sub.add_parser(name, help=text, description=text, epilog=ANGLES)
 
-    dk = command("dk", "all direct-kinematic solutions of (rho1, rho2, rho3), or of the joints "
-                       "of --mechanism: each pose [length unit, deg], its aspect and its "
-                       "signed margin")
+    dk = command("dk", "all direct-kinematic solutions (assembly modes) of (rho1, rho2, "
+                       "rho3), or of the joints of --mechanism: each pose [length unit, deg], "
+                       "its aspect and its signed margin; with --patches or --from, where each "
+                       "lies on the roadmap and which a singularity-free path reaches")
     dk.add_argument("joints", type=_leg, nargs="+", metavar="JOINT",
                     help="RHO1 RHO2 RHO3 [length unit], or with --mechanism every joint of "
                          "the file [length unit, deg for an angle]")
-    dk.add_argument("--mechanism", metavar="FILE.yaml",
-                    help="a robot of your own (config/*.yaml) instead of the paper's 3-RPR")
+    _mechanism_options(dk)
+    dk.add_argument("--patches", action="store_true",
+                    help="each mode's patch, region and layer on the roadmap the planner "
+                         "uses: the slice through the first joint's value (or --fix), or "
+                         "with --full the full roadmap (cached)")
+    dk.add_argument("--from", type=_finite, dest="start_mode", metavar="MODE",
+                    help="the mode coordinate of the mode to start from [length unit, deg "
+                         "for an angle] (implies --patches): each mode's feasibility from it, "
+                         "and for each one a path reaches, the plan command that plans it")
+    dk.add_argument("--full", action="store_true",
+                    help="with --patches: the full roadmap (the paper's, or the file's box)")
+    dk.add_argument("--cache-dir", default=default_cache_dir())
     roadmap = command("roadmap", "build the roadmap and print a JSON summary (its cusps' "
                                  "angles [deg])")
     # The paper's slice; defaults filled in by the command, so that a

@@ -206,6 +206,8 @@ def _dk(args, progress, workers):
 
         mechanism = load_mechanism_file(args.mechanism).mechanism
     else:
+        if args.fix:
+            raise InvalidInputError("--fix needs --mechanism")
         mechanism = PAPER_GEOMETRY
     names = mechanism.joint_names
     joint_angles, pose_angles = _angles(mechanism)
@@ -213,6 +215,11 @@ def _dk(args, progress, workers):
         raise InvalidInputError(f"dk takes the {len(names)} joints "
                                 f"{' '.join(_labels(names, joint_angles)).upper()} (all "
                                 f"required), got {len(args.joints)}")
+    if args.patches or args.start_mode is not None:
+        return _located_modes(args, mechanism, progress, workers)
+    if args.full or args.fix:
+        raise InvalidInputError(f"{'--full' if args.full else '--fix'} needs --patches or "
+                                "--from")
     joints = np.array([_taken(args.joints, joint_angles)])
     mechanism.check_joints(joints)
     count, poses = mechanism.solve(joints)
@@ -224,6 +231,69 @@ def _dk(args, progress, workers):
              "signed_margin": float(m)}
             for p, a, m in zip(poses, mechanism.aspect(poses, joints),
                                mechanism.margin(poses, joints))]
+
+
+def _located_modes(args, mechanism, progress, workers):
+    """``dk --patches`` / ``--from``: every mode located on the roadmap a plan
+    of these joints uses, and with ``--from`` the command that plans to each
+    mode a path reaches."""
+    from ..planning import Planner, assembly_modes
+    from .cache import cached_planning
+
+    angles = _request_angles(mechanism)
+    first = mechanism.joint_names[0]
+    if args.mechanism is None:
+        if args.full:
+            roadmap, index, _ = _full_roadmap(args.cache_dir, progress, workers)
+            where = ["--full"]
+        else:
+            grid = rho1_slice(args.joints[0])
+            roadmap, index, _ = cached_planning(PAPER_GEOMETRY, grid, args.cache_dir,
+                                                progress, workers=workers)
+            where = ["--rho1", f"{args.joints[0]:g}"]
+    else:
+        from .mechanism_file import roadmap_grid
+
+        if not args.full and not args.fix:
+            args.fix = [(first, args.joints[0])]
+        if args.full and args.fix:
+            raise InvalidInputError("--full covers every joint: give it or --fix")
+        described, grid = _file_roadmap(args)
+        base, refinement = roadmap_grid(grid)
+        roadmap, index, _ = cached_planning(mechanism, base, args.cache_dir, progress,
+                                            refinement=refinement, workers=workers)
+        where = ["--mechanism", args.mechanism,
+                 *(f"--fix {name}={value:g}" for name, value in args.fix)]
+    start_mode = None
+    if args.start_mode is not None:
+        start_mode = _taken([args.start_mode], angles[-1:])[0]
+    progress("locating the modes", 0.0)
+    modes = assembly_modes(Planner(roadmap, index), _taken(args.joints, angles[:-1]),
+                           start_mode)
+    _, pose_angles = _angles(mechanism)
+    answers = []
+    for mode in modes:
+        answer = {**_named(mechanism.pose_names, mode.pose, pose_angles),
+                  "aspect": mode.aspect, "signed_margin": mode.margin,
+                  **{key: value for key, value in mode.to_dict().items()
+                     if key in ("patch", "region", "layer", "feasibility")}}
+        if mode.unlocated:
+            answer["unlocated"] = mode.unlocated
+        if mode.reachable and mode.feasibility != "start":
+            start, goal = (_shown_request(c, angles, args.mechanism is None and not args.full)
+                           for c in (modes[[m.feasibility for m in modes].index("start")]
+                                     .configuration, mode.configuration))
+            answer["plan"] = " ".join(["rpr3-gwr plan", *where, "--start", start,
+                                       "--goal", goal])
+        answers.append(answer)
+    return answers
+
+
+def _shown_request(configuration, angles, paper_slice):
+    """A configuration as ``plan --start`` takes it: angles in degrees, the
+    paper slice's rho1 left to ``--rho1``."""
+    values = _shown(configuration, angles)[1 if paper_slice else 0:]
+    return " ".join(f"{v:.10g}" for v in values)
 
 
 def _full_roadmap(cache_dir, progress, workers):
