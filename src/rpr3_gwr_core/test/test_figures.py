@@ -57,6 +57,13 @@ def rrr_torus():
     return build_roadmap(mechanism, refine(mechanism, coarse_base(fine, 2), 2))
 
 
+@pytest.fixture(scope="module")
+def rrr_slice():
+    """The 3-RRR's slice th1 = 0: a torus of th2, th3, 120 cells a turn."""
+    described = load_mechanism_file(CONFIG / "three_rrr.yaml")
+    return build_roadmap(described.mechanism, described.grid({"th1": 0.0}))
+
+
 def written(figure, tmp_path):
     """Saves a figure as PNG and reads it back: its pixels."""
     path = tmp_path / "figure.png"
@@ -219,6 +226,63 @@ def test_start_and_goal_show_apart_where_they_share_the_legs(coarse_paper_roadma
     assert {"start (alpha = 29.5 deg)", "goal (alpha = 96.1 deg)"} <= labels
     positions = [t.xyann for t in ax.texts if t.get_text().startswith(("start", "goal"))]
     assert positions[0] != positions[1]
+
+
+def drawn_global_path(ax, k):
+    """The line of the k-th global path (from 0) in a plan figure's axes."""
+    lines = [line for line in ax.get_lines() if line.get_gid() == f"global path {k + 1}"]
+    assert len(lines) == 1
+    return lines[0]
+
+
+def test_global_paths_are_drawn_through_cells_of_their_patches(coarse_paper_roadmap):
+    roadmap = coarse_paper_roadmap
+    seg, grid = roadmap.segmentation, roadmap.grid
+    plan = planned(roadmap, Q1, Q2)
+    figure = plan_figure(roadmap, plan)
+    for k, path in enumerate(plan["global_paths"]):
+        cells = np.concatenate([seg.patches[p].cells for p in path])
+        vertices = drawn_global_path(figure.axes[0], k).get_xydata()
+        assert np.isin(grid.cells_of(vertices), cells).all()
+
+
+def test_the_planned_global_path_is_drawn_along_the_waypoints(coarse_paper_roadmap):
+    plan = planned(coarse_paper_roadmap, Q1, Q2)
+    figure = plan_figure(coarse_paper_roadmap, plan)
+    waypoints = np.array([w["joints"][1:] for w in plan["waypoints"]])
+    assert np.array_equal(drawn_global_path(figure.axes[0], plan["path_index"]).get_xydata(),
+                          waypoints)
+
+
+def test_another_global_path_crosses_its_gates_in_order_and_stays_in_its_patches(
+        coarse_paper_roadmap):
+    """Every segment of a global path that was not planned stays in cells of
+    its patches, and its vertices go from the start's patch to the goal's
+    through the path's patches in order, each step to the same patch or
+    across a face of their gate."""
+    roadmap = coarse_paper_roadmap
+    seg, grid = roadmap.segmentation, roadmap.grid
+    plan = planned(roadmap, Q1, Q2)
+    k = 1 - plan["path_index"]
+    path = plan["global_paths"][k]
+    vertices = drawn_global_path(plan_figure(roadmap, plan).axes[0], k).get_xydata()
+    cells = np.concatenate([seg.patches[p].cells for p in path])
+    t = np.linspace(0.0, 1.0, 400)[:, None]
+    for a, b in zip(vertices[:-1], vertices[1:]):
+        assert np.isin(grid.cells_of(a + t * (b - a)), cells).all()
+    # The patch of each vertex: the first of the path's patches at or after the last one.
+    at, layers = 0, []
+    for cell in grid.cells_of(vertices):
+        mine = [n for n, p in enumerate(path) if n >= at and p in seg.patch[cell]]
+        assert mine
+        at = mine[0]
+        layers.append(at)
+    assert layers[0] == 0 and layers[-1] == len(path) - 1
+    assert set(np.diff(layers)) <= {0, 1}
+    for n in np.flatnonzero(np.diff(layers)):
+        pair = grid.cells_of(vertices[n:n + 2])
+        gate = seg.gates[tuple(sorted(path[layers[n]:layers[n] + 2]))]
+        assert any(set(face) == set(pair) for face in gate.faces.tolist())
 
 
 def check_space_plan_figure(figure, roadmap, plan, tmp_path):

@@ -24,7 +24,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch as LegendPatch, Polygon
 from scipy import sparse
 from scipy.ndimage import distance_transform_cdt, find_objects, label as label_pieces
-from scipy.sparse.csgraph import connected_components
+from scipy.sparse.csgraph import connected_components, dijkstra
 
 from ..exceptions import InvalidInputError
 from ..workspace import aspect_groups
@@ -225,9 +225,13 @@ def plan_figure(roadmap, plan, world=None, sheet_stride=6):
     and each joint against the path's joint-space arc length, with the patch
     the path is in between the dotted lines.
 
-    Every global path of the plan is drawn through one point of each of its
-    patches: the chosen one solid, the others dashed, all named in the
-    legend.  The start is a green ring, the goal a red star inside it where
+    Every global path of the plan is drawn through its patches, the chosen
+    one solid along the plan's waypoints, the others dashed along a path of
+    cells of their patches that crosses their gates in order (its vertices
+    in those cells, its segments within them), all named in the legend.
+    Turning joints and angular pose coordinates are drawn over one turn,
+    the lines continuous across its seam: a line that leaves it at one side
+    comes back at the other.  The start is a green ring, the goal a red star inside it where
     they coincide, each labelled with its value of the mode coordinate.
 
     With a scene, the plane of a 2-D grid is hatched where the scene blocks
@@ -267,13 +271,12 @@ def plan_figure(roadmap, plan, world=None, sheet_stride=6):
                                 f"{sorted(unknown)} that the roadmap has not: it was planned "
                                 "on another grid")
     track = _Track(roadmap, plan)
-    patches = set().union(*paths)
+    lines = _path_lines(roadmap, track, paths, chosen)
     if roadmap.grid.ndim == 2:
         plane = _Plane(roadmap, {})
-        return _plane_plan_figure(roadmap, plane, track, paths, chosen,
-                                  _patch_points(roadmap, patches, plane), sheet_stride, world)
-    return _space_plan_figure(roadmap, track, paths, chosen, _patch_points(roadmap, patches),
-                              world)
+        return _plane_plan_figure(roadmap, plane, track, paths, chosen, lines, sheet_stride,
+                                  world)
+    return _space_plan_figure(roadmap, track, paths, chosen, lines, world)
 
 
 class _Space:
@@ -328,12 +331,21 @@ class _Space:
         return values
 
     def line(self, states):
-        """:meth:`points` of a polyline with a NaN row wherever it jumps by
-        more than half a turn: a seam it crosses, not drawn across the figure."""
-        points = self.points(states)
-        jumps = np.any((self.periods > 0)
-                       & (np.abs(np.diff(points, axis=0)) > self.periods / 2), axis=1)
-        return np.insert(points, np.flatnonzero(jumps) + 1, np.nan, axis=0)
+        """Display coordinates of a polyline drawn continuously across the
+        seams of its turning coordinates: made continuous (each step the
+        shortest way round), cut where it crosses the bounds of the turn
+        shown, and each piece moved by whole turns into that turn, so that it
+        leaves at one side and comes back at the other.  Pieces that do not
+        join are parted by a NaN row; the first and last points are the
+        first and last states' :meth:`points`."""
+        values = np.asarray(states, dtype=float)[:, self.columns] * self.scales
+        turning = self.periods > 0
+        if len(values) > 1 and turning.any():
+            steps = np.diff(values, axis=0)
+            steps[:, turning] -= self.periods[turning] * np.round(
+                steps[:, turning] / self.periods[turning])
+            values = np.vstack([values[:1], values[0] + np.cumsum(steps, axis=0)])
+        return _in_one_turn(values, self.lows, self.periods)
 
     def axes(self, fig, *position):
         """A subplot of the figure for these coordinates, 3-D for three."""
@@ -381,7 +393,10 @@ class _Plane:
 
     @property
     def extent(self):
-        return (self.u[0], self.u[-1], self.v[0], self.v[-1])
+        """The outer edges of the pixels: a turning axis spans its turn."""
+        du, dv = (np.diff(w[:2]) / 2 if w.size > 1 else np.zeros(1) for w in (self.u, self.v))
+        return (float(self.u[0] - du[0]), float(self.u[-1] + du[0]),
+                float(self.v[0] - dv[0]), float(self.v[-1] + dv[0]))
 
 
 class _Track:
@@ -421,20 +436,21 @@ class _Track:
                      for end, p in (("start", pose[0]), ("goal", pose[-1]))]
 
 
-def _draw_plan(ax, space, track, paths, chosen, points, named):
-    """The trajectory (solid black), the global paths through their patches'
-    points and the start and goal of a plan in one space; ``named``: with
-    legend labels."""
-    ax.plot(*space.line(track.states).T, "k-", lw=1.5, label="trajectory" if named else None)
-    for k, path in enumerate(paths):
+def _draw_plan(ax, space, track, paths, chosen, lines, named):
+    """The trajectory (solid black), the global paths along their
+    :func:`_path_lines` and the start and goal of a plan in one space;
+    ``named``: with legend labels."""
+    ax.plot(*space.line(track.states).T, "k-", lw=1.5, label="trajectory" if named else None,
+            gid="trajectory")
+    for k, (path, states) in enumerate(zip(paths, lines)):
         if path:
-            ax.plot(*space.line([points[p] for p in path]).T,
-                    **(_CHOSEN_STYLE if k == chosen else _OTHER_STYLE),
-                    label=_path_text(path, k, chosen) if named else None)
+            ax.plot(*space.line(states).T, **(_CHOSEN_STYLE if k == chosen else _OTHER_STYLE),
+                    label=_path_text(path, k, chosen) if named else None,
+                    gid=f"global path {k + 1}")
     _mark_ends(ax, space.points(track.states[[0, -1]]), track.ends, named)
 
 
-def _plane_plan_figure(roadmap, plane, track, paths, chosen, points, sheet_stride, world):
+def _plane_plan_figure(roadmap, plane, track, paths, chosen, lines, sheet_stride, world):
     """:func:`plan_figure` of a 2-D grid."""
     seg, mechanism = roadmap.segmentation, roadmap.mechanism
     mode = mechanism.mode_coordinate
@@ -450,7 +466,7 @@ def _plane_plan_figure(roadmap, plane, track, paths, chosen, points, sheet_strid
     for r, piece in _region_pieces(region):
         if piece["largest"]:
             _region_label(ax, plane, piece["at"], r)
-    _draw_plan(ax, plane.space, track, paths, chosen, points, named=True)
+    _draw_plan(ax, plane.space, track, paths, chosen, lines, named=True)
     ax.set_title(f"trajectory via global path {chosen + 1}{_fixed_text(roadmap, prefix=', ')}")
     ax.legend(handles=ax.get_legend_handles_labels()[0] + hatches, loc="upper left",
               fontsize=8, framealpha=0.9)
@@ -462,7 +478,7 @@ def _plane_plan_figure(roadmap, plane, track, paths, chosen, points, sheet_strid
         sheet = space.points(np.hstack([seg.field.grid.joints_at(cells),
                                         seg.field.poses[cells, slots]]))
         ax3.scatter(*sheet.T, s=1, alpha=0.25, label=str(pid))
-    _draw_plan(ax3, space, track, paths, chosen, points, named=False)
+    _draw_plan(ax3, space, track, paths, chosen, lines, named=False)
     ax3.legend(loc="upper left", markerscale=8, title="patch", fontsize=8)
     if world is not None:
         _draw_base_plane(fig, (1, 3, 3), mechanism, track, world)
@@ -470,7 +486,7 @@ def _plane_plan_figure(roadmap, plane, track, paths, chosen, points, sheet_strid
     return fig
 
 
-def _space_plan_figure(roadmap, track, paths, chosen, points, world):
+def _space_plan_figure(roadmap, track, paths, chosen, lines, world):
     """:func:`plan_figure` of a grid that is not 2-D."""
     mechanism = roadmap.mechanism
     columns = 2 if world is None else 3
@@ -478,13 +494,13 @@ def _space_plan_figure(roadmap, track, paths, chosen, points, world):
     fig.subplots_adjust(left=0.12 / columns, right=0.97, bottom=0.1, top=0.88, hspace=0.25)
     legs = _Space.of_joints(roadmap, range(min(3, mechanism.n_joints)))
     ax = legs.axes(fig, 2, columns, 1)
-    _draw_plan(ax, legs, track, paths, chosen, points, named=True)
+    _draw_plan(ax, legs, track, paths, chosen, lines, named=True)
     ax.set_title(f"legs along the path, via global path {chosen + 1}")
     # Above both views, which draw the same lines: inside one it hides the path.
     fig.legend(*ax.get_legend_handles_labels(), loc="upper center", ncols=2, fontsize=8)
     pose = _Space.of_pose(mechanism, range(min(3, mechanism.pose_size)))
     ax_pose = pose.axes(fig, 2, columns, 2)
-    _draw_plan(ax_pose, pose, track, paths, chosen, points, named=False)
+    _draw_plan(ax_pose, pose, track, paths, chosen, lines, named=False)
     ax_pose.set_title("pose track of the platform")
 
     ax_q = fig.add_subplot(2, 1, 2)
@@ -805,10 +821,213 @@ def _fixed_text(roadmap, prefix):
     return prefix + text if text else ""
 
 
-def _patch_points(roadmap, ids, plane=None):
-    """One solution of each patch, where the global paths are drawn through
-    it: at the patch's most interior pixel of a plane through a 2-D grid,
-    else at its cell nearest the mean of its cells (in steps).
+def _in_one_turn(points, lows, periods):
+    """A continuous polyline (display coordinates) drawn in one turn of its
+    turning coordinates (``periods > 0``): each segment cut where it
+    crosses ``lows + m * periods``, each piece moved by whole turns into
+    ``[lows, lows + periods]``, NaN rows between pieces that do not join.
+
+    Returns
+    -------
+    ndarray, shape (m, len(lows))
+    """
+    points = np.asarray(points, dtype=float)
+    turning = periods > 0
+    if not turning.any() or len(points) == 0:
+        return points
+    period = np.where(turning, periods, 1.0)
+
+    def tile(point):
+        return np.where(turning, np.floor((point - lows) / period), 0.0)
+
+    if len(points) == 1:
+        return points - tile(points[0]) * period
+    out, previous = [], None
+    for a, b in zip(points[:-1], points[1:]):
+        step = b - a
+        cuts = [0.0, 1.0]
+        for k in np.flatnonzero(turning & (step != 0)):
+            ends = sorted(((a[k] - lows[k]) / period[k], (b[k] - lows[k]) / period[k]))
+            bounds = lows[k] + period[k] * np.arange(np.ceil(ends[0]), np.floor(ends[1]) + 1)
+            cuts.extend((bounds - a[k]) / step[k])
+        cuts = np.unique(np.clip(cuts, 0.0, 1.0))
+        for t0, t1 in zip(cuts[:-1], cuts[1:]):
+            here = tile(a + 0.5 * (t0 + t1) * step)
+            shift = here * period
+            if previous is None or np.any(here != previous):
+                if previous is not None:
+                    out.append(np.full(points.shape[1], np.nan))
+                out.append(a + t0 * step - shift)
+            out.append(a + t1 * step - shift)
+            previous = here
+    return np.array(out)
+
+
+def _path_lines(roadmap, track, paths, chosen):
+    """The states each global path of a plan is drawn through: the plan's
+    waypoints for the chosen one, else :func:`_cell_path` from the start to
+    the goal (one point per patch, :func:`_patch_points`, where no path of
+    cells joins them).
+
+    Returns
+    -------
+    list of ndarray, shape (n, n_joints + pose_size)
+        One per global path (None for an empty one).
+    """
+    lines = []
+    for k, path in enumerate(paths):
+        if not path:
+            lines.append(None)
+        elif k == chosen:
+            lines.append(track.states)
+        else:
+            states = _cell_path(roadmap, path, track.states[0], track.states[-1])
+            if states is None:
+                points = _patch_points(roadmap, path)
+                states = np.array([points[p] for p in path])
+            lines.append(states)
+    return lines
+
+
+def _cell_path(roadmap, path, start, goal):
+    """A polyline through the cells of a global path's patches, in order.
+
+    The shortest path (in grid steps) over solutions of the path's patches,
+    from the cell nearest the start in its first patch to the cell nearest
+    the goal in its last, moving between face-adjacent cells along the
+    solution's continuation inside a patch and from one patch to the next
+    only across a face of their gate.  It is drawn through the cells on
+    both sides of each gate face it crosses and, between them, through as
+    few of its cells as keep every straight segment within cells of the
+    path's patches (and below a quarter turn in every turning joint and
+    angular pose coordinate, so that it is drawn the short way round).
+
+    Parameters
+    ----------
+    roadmap : Roadmap
+    path : list of int
+        Patch ids, joined by gates in this order.
+    start, goal : ndarray
+        States (joints, then pose) whose cells the line starts and ends
+        nearest.
+
+    Returns
+    -------
+    ndarray, shape (n, n_joints + pose_size) or None
+        The joints (continuous across seams) and pose of the cells drawn
+        through; None where no path of cells joins start and goal.
+    """
+    seg = roadmap.segmentation
+    field, grid = seg.field, seg.field.grid
+    width = seg.patch.shape[1]
+    per_layer = grid.size * width
+    layer_of = np.full(max(seg.patches) + 1, -1)
+    layer_of[list(path)] = np.arange(len(path))
+    patches = [seg.patches[p] for p in path]
+    cells = np.concatenate([p.cells for p in patches])
+    slots = np.concatenate([p.slots for p in patches])
+    layers = np.repeat(np.arange(len(path)), [p.cells.size for p in patches])
+    keys = layers * per_layer + cells * width + slots
+    order = np.argsort(keys)
+    ordered = keys[order]
+
+    def nodes(layer, cell, slot):
+        return order[np.searchsorted(ordered, layer * per_layer + cell * width + slot)]
+
+    rows, columns, weights = [], [], []
+    for (lower, upper, match), lengths, step in zip(seg.links, grid.pair_lengths(), grid.steps):
+        for slot in range(width):
+            linked = np.flatnonzero(match[:, slot] >= 0)
+            other = match[linked, slot].astype(np.int64)
+            a = layer_of[seg.patch[lower[linked], slot]]
+            b = layer_of[seg.patch[upper[linked], other]]
+            keep = (a >= 0) & (b >= 0) & (np.abs(a - b) <= 1)
+            a, b, linked, other = a[keep], b[keep], linked[keep], other[keep]
+            na = nodes(a, lower[linked], slot)
+            nb = nodes(b, upper[linked], other)
+            weight = lengths[linked] / step
+            # Inside a patch both ways, across a gate only forwards.
+            rows += [np.where(a <= b, na, nb), nb[a == b]]
+            columns += [np.where(a <= b, nb, na), na[a == b]]
+            weights += [weight, weight[a == b]]
+    n = cells.size
+    coordinates = grid.coordinates_of(cells)
+    axes = list(grid.axis_joints)
+
+    def distances(state):
+        offset = coordinates - np.asarray(state, dtype=float)[axes]
+        offset -= grid.periods * np.round(offset / np.where(grid.periods > 0, grid.periods, 1.0))
+        return np.linalg.norm(offset / np.array(grid.steps), axis=1)
+
+    # From the start's nearest solution of the first patch, to the goal's of the last.
+    first, last = np.flatnonzero(layers == 0), np.flatnonzero(layers == len(path) - 1)
+    first, last = first[np.argmin(distances(start)[first])], last[np.argmin(distances(goal)[last])]
+    rows += [[n], [last]]
+    columns += [[first], [n + 1]]
+    weights += [[0.0], [0.0]]
+    # Explicit zeros would be no edges.
+    graph = sparse.csr_matrix((np.concatenate(weights) + 1e-9,
+                               (np.concatenate(rows), np.concatenate(columns))),
+                              shape=(n + 2, n + 2))
+    distance, previous = dijkstra(graph, indices=n, return_predecessors=True)
+    if not np.isfinite(distance[n + 1]):
+        return None
+    walk = []
+    node = previous[n + 1]
+    while node != n:
+        walk.append(node)
+        node = previous[node]
+    walk = np.array(walk[::-1])
+    joints = grid.unwrap(grid.joints_at(cells[walk]))
+    pose = field.poses[cells[walk], slots[walk]].copy()
+    angular = np.array(roadmap.mechanism.angular, dtype=bool)
+    pose[:, angular] = np.unwrap(pose[:, angular], axis=0)
+    states = np.hstack([joints, pose])
+    allowed = np.zeros(grid.size, dtype=bool)
+    allowed[cells] = True
+    turning = np.concatenate([[a.periodic for a in grid.axes], angular])
+    columns_turning = np.concatenate([axes, grid.n_joints + np.arange(angular.size)])[turning]
+    kept = [0]
+    runs = np.flatnonzero(np.diff(layers[walk]) != 0)
+    for first, end in zip(np.concatenate([[0], runs + 1]), np.append(runs, walk.size - 1)):
+        if first != kept[-1]:
+            kept.append(first)
+        i = first
+        while i < end:
+            j = i + 1
+            while j < end and _straight(grid, allowed, states[i], states[j + 1],
+                                        columns_turning):
+                j += 1
+            kept.append(j)
+            i = j
+    return states[kept]
+
+
+def _straight(grid, allowed, a, b, turning):
+    """Whether the straight segment between two states (joints continuous)
+    stays within ``allowed`` cells and moves less than a quarter turn along
+    each of the ``turning`` columns."""
+    if np.any(np.abs(b[turning] - a[turning]) >= 0.5 * math.pi):
+        return False
+    axes = list(grid.axis_joints)
+    start, step = a[axes], b[axes] - a[axes]
+    # Cut at every half step: between two cuts the cell does not change.
+    cuts = [0.0, 1.0]
+    for k, axis in enumerate(grid.axes):
+        if step[k] != 0:
+            ends = sorted(((start[k] - axis.low) / axis.step * 2,
+                           (start[k] + step[k] - axis.low) / axis.step * 2))
+            halves = np.arange(np.ceil(ends[0]), np.floor(ends[1]) + 1)
+            cuts.extend((axis.low + halves * axis.step / 2 - start[k]) / step[k])
+    cuts = np.unique(np.clip(cuts, 0.0, 1.0))
+    middles = 0.5 * (cuts[:-1] + cuts[1:])
+    cells = grid.cells_of(start + middles[:, None] * step)
+    return bool(np.all(cells >= 0) and np.all(allowed[cells]))
+
+
+def _patch_points(roadmap, ids):
+    """One solution of each patch: at its cell nearest the mean of its cells
+    (in steps).
 
     Returns
     -------
@@ -820,14 +1039,9 @@ def _patch_points(roadmap, ids, plane=None):
     points = {}
     for pid in ids:
         patch = seg.patches[pid]
-        if plane is not None:
-            inside = np.zeros(grid.size, dtype=bool)
-            inside[patch.cells] = True
-            k = np.searchsorted(patch.cells, plane.cells[_interior_point(inside[plane.cells])])
-        else:
-            coordinates = grid.coordinates_of(patch.cells)
-            offsets = (coordinates - coordinates.mean(axis=0)) / np.array(grid.steps)
-            k = np.argmin(np.einsum("ij,ij->i", offsets, offsets))
+        coordinates = grid.coordinates_of(patch.cells)
+        offsets = (coordinates - coordinates.mean(axis=0)) / np.array(grid.steps)
+        k = np.argmin(np.einsum("ij,ij->i", offsets, offsets))
         cell = patch.cells[k]
         points[pid] = np.concatenate([grid.joints_at([cell])[0],
                                       seg.field.poses[cell, patch.slots[k]]])
