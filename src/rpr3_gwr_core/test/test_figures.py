@@ -285,6 +285,60 @@ def test_another_global_path_crosses_its_gates_in_order_and_stays_in_its_patches
         assert any(set(face) == set(pair) for face in gate.faces.tolist())
 
 
+def plan_across_the_seam(roadmap):
+    """A plan in one patch of the 3-RRR's slice from 8 cells before the seam
+    of th2 to 8 cells after it: the clearest such pair of solutions."""
+    seg, field, grid = roadmap.segmentation, roadmap.field, roadmap.grid
+    n = grid.axes[0].count
+    best = None
+    for j in range(grid.axes[1].count):
+        a, b = (int(np.ravel_multi_index((i, j), grid.shape)) for i in (n - 8, 7))
+        for i in range(field.count[a]):
+            for k in np.flatnonzero(seg.patch[b, :field.count[b]] == seg.patch[a, i]):
+                clear = min(abs(field.margin[a, i]), abs(field.margin[b, k]))
+                if seg.patch[a, i] > 0 and (best is None or clear > best[0]):
+                    best = (clear, a, i, b, k)
+    _, a, i, b, k = best
+    mode = roadmap.mechanism.mode_coordinate
+    return planned(roadmap, (*grid.joints_of(a), field.poses[a, i, mode]),
+                   (*grid.joints_of(b), field.poses[b, k, mode]))
+
+
+def turns_apart(x, y):
+    """Whether two points in degrees differ by whole turns."""
+    offset = np.asarray(x) - np.asarray(y)
+    return np.allclose(offset - 360.0 * np.round(offset / 360.0), 0.0, atol=1e-9)
+
+
+def test_a_trajectory_across_the_seam_is_drawn_on_from_its_start_to_its_goal(rrr_slice):
+    plan = plan_across_the_seam(rrr_slice)
+    joints = np.degrees([w["joints"][1:] for w in plan["waypoints"]])
+    # th2 crosses its seam at +-180 deg: a short move, across the ends of its turn.
+    wrapped = np.mod(joints + 180.0, 360.0) - 180.0
+    assert np.ptp(np.degrees(rrr_slice.grid.unwrap(
+        [w["joints"] for w in plan["waypoints"]])[:, 1])) < 180.0 < np.ptp(wrapped[:, 0])
+    figure = plan_figure(rrr_slice, plan)
+    for ax in figure.axes[:2]:
+        lines = [line for line in ax.get_lines() if line.get_gid() == "trajectory"]
+        assert len(lines) == 1
+        drawn = np.array(lines[0].get_data_3d() if ax.name == "3d"
+                         else lines[0].get_xydata().T).T[:, :2]
+        assert turns_apart(drawn[0], joints[0]) and turns_apart(drawn[-1], joints[-1])
+        steps = np.diff(drawn, axis=0)
+        steps = steps[np.all(np.isfinite(steps), axis=1)]
+        assert np.all(np.abs(steps) <= 180.0)
+        # Nothing left out: the pieces drawn are as long as the path.
+        length = np.linalg.norm(np.diff(np.degrees(rrr_slice.grid.unwrap(
+            [w["joints"] for w in plan["waypoints"]]))[:, 1:], axis=0), axis=1).sum()
+        assert np.linalg.norm(steps, axis=1).sum() == pytest.approx(length)
+    # The start and goal marks sit on the drawn line.
+    ax = figure.axes[0]
+    drawn = [line for line in ax.get_lines() if line.get_gid() == "trajectory"][0].get_xydata()
+    for end in ("start", "goal"):
+        mark = [line for line in ax.get_lines() if line.get_label().startswith(end)][0]
+        assert np.nanmin(np.linalg.norm(drawn - mark.get_xydata()[0], axis=1)) < 1e-9
+
+
 def check_space_plan_figure(figure, roadmap, plan, tmp_path):
     """The plan figure off a 2-D grid: the joints in 3-D, the pose track in
     3-D, every joint against the path, the global paths and ends in the
