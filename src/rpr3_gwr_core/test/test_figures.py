@@ -18,6 +18,7 @@ from rpr3_gwr_core.io.figures import field_figure, plan_figure, roadmap_figure, 
 from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
 from rpr3_gwr_core.mechanisms import DEFAULT_FIVE_BAR
 from rpr3_gwr_core.workspace.adaptive import coarse_base, refine
+from rpr3_gwr_core.workspace.cusps import find_cusps
 from rpr3_gwr_core.workspace.grid import Axis
 from rpr3_gwr_core.world import EMPTY_SCENE, load_scene
 
@@ -337,6 +338,18 @@ def test_a_trajectory_across_the_seam_is_drawn_on_from_its_start_to_its_goal(rrr
     for end in ("start", "goal"):
         mark = [line for line in ax.get_lines() if line.get_label().startswith(end)][0]
         assert np.nanmin(np.linalg.norm(drawn - mark.get_xydata()[0], axis=1)) < 1e-9
+
+
+def test_a_plan_figure_on_a_slice_marks_its_cusps(coarse_paper_roadmap):
+    cusps = find_cusps(coarse_paper_roadmap)
+    assert cusps
+    figure = plan_figure(coarse_paper_roadmap, planned(coarse_paper_roadmap, MODE_A, MODE_B))
+    ax = figure.axes[0]
+    assert "cusp" in legend_texts(ax.get_legend())
+    marks = [line for line in ax.get_lines() if line.get_label() == "cusp"]
+    assert len(marks) == 1
+    assert np.allclose(marks[0].get_xydata(), [c.joints[1:] for c in cusps])
+    assert marks[0].get_marker() == "^"
 
 
 def check_space_plan_figure(figure, roadmap, plan, tmp_path):

@@ -234,6 +234,9 @@ def plan_figure(roadmap, plan, world=None, sheet_stride=6):
     comes back at the other.  The start is a green ring, the goal a red star inside it where
     they coincide, each labelled with its value of the mode coordinate.
 
+    On a slice (a 2-D grid with cusp equations), the cusps of its singular
+    curve are marked as in :func:`field_figure`, in both views.
+
     With a scene, the plane of a 2-D grid is hatched where the scene blocks
     solutions (as in :func:`field_figure`), and a panel on the right draws
     the base plane in the length unit: the obstacles with their ids, the
@@ -466,6 +469,9 @@ def _plane_plan_figure(roadmap, plane, track, paths, chosen, lines, sheet_stride
     for r, piece in _region_pieces(region):
         if piece["largest"]:
             _region_label(ax, plane, piece["at"], r)
+    cusps = known_cusps(roadmap)
+    if cusps:
+        ax.plot(*plane.space.points([c.joints for c in cusps]).T, "r^", ms=8, label="cusp")
     _draw_plan(ax, plane.space, track, paths, chosen, lines, named=True)
     ax.set_title(f"trajectory via global path {chosen + 1}{_fixed_text(roadmap, prefix=', ')}")
     ax.legend(handles=ax.get_legend_handles_labels()[0] + hatches, loc="upper left",
@@ -478,6 +484,9 @@ def _plane_plan_figure(roadmap, plane, track, paths, chosen, lines, sheet_stride
         sheet = space.points(np.hstack([seg.field.grid.joints_at(cells),
                                         seg.field.poses[cells, slots]]))
         ax3.scatter(*sheet.T, s=1, alpha=0.25, label=str(pid))
+    if cusps:
+        ax3.plot(*space.points([np.concatenate([c.joints, c.pose]) for c in cusps]).T, "r^",
+                 ms=6)
     _draw_plan(ax3, space, track, paths, chosen, lines, named=False)
     ax3.legend(loc="upper left", markerscale=8, title="patch", fontsize=8)
     if world is not None:
