@@ -49,6 +49,10 @@ _START_STYLE = {"marker": "o", "ms": 15, "mfc": "none", "mec": _START_COLOUR, "m
 _GOAL_STYLE = {"marker": "*", "ms": 11, "color": _GOAL_COLOUR, "mec": "k", "mew": 0.5,
                "ls": "none"}
 _OBSTACLE_STYLE = {"fc": "0.6", "ec": "k", "lw": 0.8}
+# A global path not planned is drawn along cells of its patches, a step
+# costing up to 1 + _EDGE_COST times more near their edges (closer than
+# _EDGE_REACH steps).
+_EDGE_COST, _EDGE_REACH = 3.0, 6.0
 
 
 def field_figure(roadmap, world=None):
@@ -960,6 +964,21 @@ def _cell_path(roadmap, path, start, goal):
             columns += [np.where(a <= b, nb, na), na[a == b]]
             weights += [weight, weight[a == b]]
     n = cells.size
+    # Kept off the patches' edges, where a straight line soon leaves them: a
+    # step costs more the nearer its cells are to a solution of the path's
+    # patches with fewer neighbours than a cell has faces.
+    rows, columns = np.concatenate(rows), np.concatenate(columns)
+    edge = sparse.csr_matrix((np.ones(rows.size), (rows, columns)), shape=(n, n))
+    edge = ((edge + edge.T) > 0).astype(float).tocsr()
+    degree = np.diff(edge.indptr)
+    depth = np.zeros(n)
+    boundary = np.flatnonzero(degree < 2 * grid.ndim)
+    if boundary.size:
+        depth = np.minimum(dijkstra(edge, directed=False, indices=boundary, min_only=True,
+                                    limit=_EDGE_REACH), _EDGE_REACH)
+    weights = np.concatenate(weights) * (
+        1.0 + _EDGE_COST / (1.0 + np.minimum(depth[rows], depth[columns])))
+    rows, columns, weights = [rows], [columns], [weights]
     coordinates = grid.coordinates_of(cells)
     axes = list(grid.axis_joints)
 
