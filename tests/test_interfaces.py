@@ -15,13 +15,13 @@ def _interfaces():
 def test_the_package_ships_the_designed_interfaces():
     assert _interfaces() == [
         ("action", "ExecuteTrajectory"),
-        ("msg", "AxisLinks"), ("msg", "Configuration"), ("msg", "Cusp"), ("msg", "FixedJoint"),
+        ("msg", "AssemblyMode"), ("msg", "AxisLinks"), ("msg", "Configuration"), ("msg", "Cusp"), ("msg", "FixedJoint"),
         ("msg", "Gate"), ("msg", "GlobalPath"), ("msg", "Grid"), ("msg", "GridAxis"),
         ("msg", "JointRange"), ("msg", "Mechanism"), ("msg", "MechanismParameter"),
         ("msg", "NSolutionField"), ("msg", "Obstacle"), ("msg", "PlatformPose"),
         ("msg", "Scene"), ("msg", "WorkspacePatch"),
         ("msg", "WorkspaceRoadmap"),
-        ("srv", "PlanPath"), ("srv", "ResetDriver"),
+        ("srv", "AssemblyModes"), ("srv", "PlanPath"), ("srv", "ResetDriver"),
     ]
 
 
@@ -38,10 +38,12 @@ def test_every_interface_imports_and_instantiates():
 
 def test_constants_of_each_group_are_distinct():
     from rpr3_gwr_msgs.action import ExecuteTrajectory
-    from rpr3_gwr_msgs.srv import PlanPath, ResetDriver
+    from rpr3_gwr_msgs.msg import AssemblyMode
+    from rpr3_gwr_msgs.srv import AssemblyModes, PlanPath, ResetDriver
 
     for cls, prefix in ((PlanPath.Response, "ERROR_"), (PlanPath.Response, "FEASIBILITY_"),
-                        (ResetDriver.Response, "ERROR_"), (ExecuteTrajectory.Result, "")):
+                        (ResetDriver.Response, "ERROR_"), (ExecuteTrajectory.Result, ""),
+                        (AssemblyModes.Response, "ERROR_"), (AssemblyMode, "FEASIBILITY_")):
         values = [getattr(cls, n) for n in dir(cls) if n.isupper() and n.startswith(prefix)
                   and isinstance(getattr(cls, n), int)]
         assert len(values) == len(set(values)) > 3

@@ -1,6 +1,7 @@
 """The planner node under hostile requests: every request gets an answer with
-a code from the list, every success is a sound trajectory, the node keeps
-serving.  Real rclpy and Fast DDS: a planner node and a publisher of the
+a code from the list, every success is a sound trajectory (or, from the
+assembly modes service, the joints' modes as the reference finds them), the
+node keeps serving.  Real rclpy and Fast DDS: a planner node and a publisher of the
 paper's roadmap messages, spun by one executor thread, and a PlannerClient
 spinning itself in the test's thread."""
 
@@ -18,15 +19,15 @@ from rclpy.parameter import Parameter
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID
 from rpr3_gwr_core.planning import Planner
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
-from rpr3_gwr_msgs.msg import Configuration, NSolutionField, WorkspaceRoadmap
-from rpr3_gwr_msgs.srv import PlanPath
+from rpr3_gwr_msgs.msg import AssemblyMode, Configuration, NSolutionField, WorkspaceRoadmap
+from rpr3_gwr_msgs.srv import AssemblyModes, PlanPath
 from rpr3_gwr_nodes.conversions import roadmap_to_msgs
 from rpr3_gwr_nodes.planner import PlannerNode
 from rpr3_gwr_nodes.profiles import LATCHED_QOS
 from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
 
-from pose_reference import follow, legs_of
+from pose_reference import follow, legs_of, margin_of
 from process_tree import children, wait_for_children
 
 from spun_nodes import SpunNodes
@@ -441,3 +442,96 @@ def test_killed_plan_workers_leave_the_node_planning_in_its_own_process(ros_cont
         assert infeasible.feasibility == PlanPath.Response.FEASIBILITY_OTHER_ASPECT
     finally:
         service.close()
+
+
+# --- the assembly modes service -----------------------------------------------------------------
+
+MODE_CODES = {getattr(AssemblyModes.Response, name): name
+              for name in dir(AssemblyModes.Response) if name.startswith("ERROR_")}
+MODE_FEASIBILITY = {getattr(AssemblyMode, name): name for name in dir(AssemblyMode)
+                    if name.startswith("FEASIBILITY_")}
+MODES_FUZZ_REQUESTS = 150
+
+
+def check_modes(joints, start_mode, response):
+    """An answer is an error of the list (never a bug) or the modes of the
+    joints: each closes the legs, its aspect the sign of det Jx, by the
+    independent reference; with a start mode, exactly one is the start."""
+    assert response.error_code in MODE_CODES, response.error_code
+    assert response.error_code != AssemblyModes.Response.ERROR_INTERNAL, response.error_msg
+    assert response.success == (response.error_code == AssemblyModes.Response.ERROR_NONE)
+    if not response.success:
+        assert response.error_msg and not response.modes
+        return
+    assert response.modes
+    for mode in response.modes:
+        pose = list(mode.pose.values)
+        np.testing.assert_allclose(legs_of(pose), _joints(mode.configuration), atol=1e-7)
+        np.testing.assert_allclose(_joints(mode.configuration), joints, rtol=1e-4)
+        assert mode.aspect == np.sign(margin_of(pose))
+        assert mode.feasibility in MODE_FEASIBILITY
+        assert mode.located == (not mode.unlocated)
+    starts = [m for m in response.modes if m.feasibility == AssemblyMode.FEASIBILITY_START]
+    assert len(starts) == (1 if start_mode is not None else 0)
+
+
+def test_the_modes_a_path_reaches_from_a_start_are_planned_to(service):
+    joints, start = MODE_A[:3], MODE_A[3]
+    response = service.client.assembly_modes(joints, start, timeout_sec=TIMEOUT)
+    check_modes(joints, start, response)
+    reachable = [m for m in response.modes if m.feasibility in (
+        AssemblyMode.FEASIBILITY_SAME_PATCH, AssemblyMode.FEASIBILITY_CONNECTED)]
+    assert any(abs(m.configuration.mode - MODE_B[3]) < D(1) for m in reachable)
+    for mode in reachable:
+        plan = service.client.plan(_configuration(MODE_A), mode.configuration,
+                                   timeout_sec=TIMEOUT)
+        assert plan.success, plan.error_msg
+        assert follow(np.array([p.positions for p in plan.trajectory.points]),
+                      list(plan.poses[0].values), 1e-3 * (1 - 1e-3))["ok"]
+
+
+@pytest.mark.parametrize("joints, start, code", [
+    ((17.0, math.nan, 25.0), None, "ERROR_INVALID_INPUT"),
+    ((17.0, 20.0), None, "ERROR_INVALID_INPUT"),
+    ((13.0, 20.0, 25.0), None, "ERROR_FIXED_JOINT_MISMATCH"),
+    ((17.0, 60.0, 25.0), None, "ERROR_OUT_OF_GRID"),
+    ((17.0, 2.0, 45.0), None, "ERROR_NO_SOLUTION"),
+    ((17.0, 20.0, 25.0), 0.0, "ERROR_NO_ASSEMBLY_MODE"),
+    ({"rho1": 17.0, "rho2": 20.0, "rho4": 25.0}, None, "ERROR_INVALID_INPUT"),
+])
+def test_joints_the_roadmap_cannot_take_get_their_code(service, joints, start, code):
+    response = service.client.assembly_modes(joints, start, timeout_sec=TIMEOUT)
+    assert MODE_CODES[response.error_code] == code, response.error_msg
+    check_modes(joints, start, response)
+
+
+@st.composite
+def mode_requests(draw):
+    """Joints mostly of the roadmap's slice, in order or by name, else of
+    any count and value; a start mode or none; a tolerance or the default."""
+    values = draw(configurations())
+    kind = draw(st.sampled_from(["ordered", "ordered", "named", "count"]))
+    if kind == "ordered":
+        joints = list(values[:3])
+    elif kind == "named":
+        order = draw(st.permutations(range(3)))
+        joints = {NAMES[k]: values[k] for k in order}
+    else:
+        joints = (list(values[:3]) * 3)[:draw(st.sampled_from([0, 1, 2, 4]))]
+    start = draw(st.one_of(st.none(), st.just(values[3]), angle))
+    tolerance = draw(st.one_of(st.just(0.0), st.floats(1e-4, 0.2), hostile))
+    return joints, start, tolerance
+
+
+@settings(max_examples=MODES_FUZZ_REQUESTS, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+@given(request=mode_requests())
+def test_fuzzed_assembly_mode_requests_get_sound_answers(service, request):
+    joints, start, tolerance = request
+    response = service.client.assembly_modes(joints, start, mode_tolerance=tolerance,
+                                             timeout_sec=TIMEOUT)
+    ordered = [joints[n] for n in NAMES] if isinstance(joints, dict) else joints
+    check_modes(ordered, start, response)
+    # The node still plans.
+    if not response.success:
+        assert service.plan(Q1, Q2).success

@@ -41,7 +41,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import Configuration, Scene, WorkspaceRoadmap
-from rpr3_gwr_msgs.srv import PlanPath, ResetDriver
+from rpr3_gwr_msgs.srv import AssemblyModes, PlanPath, ResetDriver
 from std_msgs.msg import Header
 
 from .profiles import LATCHED_QOS, SERVICE_QOS
@@ -155,6 +155,8 @@ class PlannerClient(Node):
         # The service's own history (profiles.SERVICE_QOS): with the default
         # 10, clients calling at a high rate had requests lost.
         self._plan_client = self.create_client(PlanPath, "plan_path", qos_profile=SERVICE_QOS)
+        self._modes_client = self.create_client(AssemblyModes, "assembly_modes",
+                                                qos_profile=SERVICE_QOS)
         self._reset_client = self.create_client(ResetDriver, "reset")
         self._action_client = ActionClient(self, ExecuteTrajectory, "execute_trajectory")
         self._action_name = self.resolve_service_name("execute_trajectory")
@@ -290,6 +292,42 @@ class PlannerClient(Node):
             feasibility_only=feasibility_only, max_velocity=float(max_velocity),
             max_acceleration=float(max_acceleration), time_limit=float(time_limit))
         return self._call(self._plan_client, request, timeout_sec)
+
+    def assembly_modes(self, joints, start_mode=None, *, mode_tolerance=0.0,
+                       timeout_sec=60.0):
+        """Ask the planner for every assembly mode of some joints on its
+        roadmap: where each lies and, from a start mode, which a
+        singularity-free path reaches (plan to it with :meth:`plan`).
+
+        Parameters
+        ----------
+        joints : mapping or sequence of float
+            The joint positions, by name or in the mechanism's order [joint
+            unit].
+        start_mode : float, optional
+            The mode coordinate of the mode to start from.
+        mode_tolerance : float
+            Tolerance on it, 0 for the core's default [rad, or length unit].
+        timeout_sec : float
+            Longest wait for the answer, the service's included [s].
+
+        Returns
+        -------
+        rpr3_gwr_msgs.srv.AssemblyModes.Response
+            ``success``, ``error_code`` (``ERROR_*``), ``error_msg`` and the
+            ``modes`` (``rpr3_gwr_msgs/AssemblyMode``: its configuration,
+            pose, aspect, patch, region and ``feasibility``).
+
+        Raises
+        ------
+        TimeoutError
+            If the service is not there or does not answer within
+            ``timeout_sec``.
+        """
+        request = AssemblyModes.Request(
+            joints=configuration(joints, 0.0 if start_mode is None else start_mode),
+            with_start=start_mode is not None, mode_tolerance=float(mode_tolerance))
+        return self._call(self._modes_client, request, timeout_sec)
 
     def reset_driver(self, configuration, timeout_sec=10.0):
         """Put the driver's simulated mechanism at ``configuration``.

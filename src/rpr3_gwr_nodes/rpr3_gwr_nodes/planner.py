@@ -10,7 +10,9 @@ roadmap is warmed up, requests are answered ``ERROR_NO_ROADMAP``: a client
 knows the planner is ready when a request gets another answer (the node logs
 "planning on a new roadmap" then).
 
-Serves ``plan_path`` (rpr3_gwr_msgs/PlanPath) from a reentrant callback group
+Serves ``plan_path`` (rpr3_gwr_msgs/PlanPath), and ``assembly_modes``
+(rpr3_gwr_msgs/AssemblyModes: the modes of given joints, located, and which a
+path reaches from a start mode), from a reentrant callback group
 on a multithreaded executor, so several requests run at once.  Once ready,
 the node builds the roadmap's planning index (the gate distances of its
 ``clearance``: seconds on the full 3-DOF roadmap, during which requests are
@@ -72,9 +74,10 @@ from rpr3_gwr_core.io.cache import find_cached_planning
 from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
 from rpr3_gwr_core.io.paths import default_cache_dir
 from rpr3_gwr_core.planning import (DEFAULT_CLEARANCE, PlanningIndex, PlanOptions, Planner,
-                                    Retries, Termination, planning_index)
-from rpr3_gwr_msgs.msg import GlobalPath, NSolutionField, Scene, WorkspaceRoadmap
-from rpr3_gwr_msgs.srv import PlanPath
+                                    Retries, Termination, assembly_modes, planning_index)
+from rpr3_gwr_msgs.msg import (AssemblyMode, Configuration, GlobalPath, NSolutionField, Scene,
+                               WorkspaceRoadmap)
+from rpr3_gwr_msgs.srv import AssemblyModes, PlanPath
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from visualization_msgs.msg import MarkerArray
@@ -309,6 +312,8 @@ class PlannerNode(Node):
         self.marker_pub = self.create_publisher(MarkerArray, "planned_path_markers", 10)
         self.create_service(PlanPath, "plan_path", self._on_plan, qos_profile=SERVICE_QOS,
                             callback_group=ReentrantCallbackGroup())
+        self.create_service(AssemblyModes, "assembly_modes", self._on_assembly_modes,
+                            qos_profile=SERVICE_QOS, callback_group=ReentrantCallbackGroup())
         # Set once a first roadmap is planned on.
         self.ready = threading.Event()
         # Set once the latest roadmap's planning index is built and its
@@ -584,6 +589,31 @@ class PlannerNode(Node):
     def _header(self):
         return Header(stamp=self.get_clock().now().to_msg(), frame_id=BASE_FRAME)
 
+    def _on_assembly_modes(self, request, response):
+        state = self._state
+        try:
+            if state is None:
+                return _failed(response, AssemblyModes.Response.ERROR_NO_ROADMAP,
+                               "no roadmap received yet on 'field' and 'roadmap'")
+            planner = state.planner
+            mechanism = planner.roadmap.mechanism
+            *joints, mode = configuration_from_msg(mechanism, request.joints)
+            tolerance = request.mode_tolerance or None
+            modes = assembly_modes(planner, joints, mode if request.with_start else None,
+                                   tolerance)
+            response.modes = [_assembly_mode_msg(mechanism, m) for m in modes]
+            response.success = True
+            response.error_code = AssemblyModes.Response.ERROR_NONE
+            return response
+        except GWRError as exc:
+            code = getattr(AssemblyModes.Response, f"ERROR_{exc.code}",
+                           AssemblyModes.Response.ERROR_INTERNAL)
+            return _failed(AssemblyModes.Response(), code, str(exc))
+        except Exception as exc:  # a bug must not take the service down
+            self.get_logger().error(f"internal error on an assembly modes request: {exc!r}")
+            return _failed(AssemblyModes.Response(), AssemblyModes.Response.ERROR_INTERNAL,
+                           f"internal error: {exc!r}")
+
 
 class _CompileNotice(numba_event.Listener):
     """Logs the first compilation numba starts."""
@@ -621,6 +651,36 @@ def _describe(roadmap):
         return f"the {roadmap.mechanism.kind}, every joint free, {grid.size} cells"
     fixed = ", ".join(f"{names[joint]} = {value:g}" for joint, value in grid.fixed)
     return f"the {roadmap.mechanism.kind}, {fixed}"
+
+
+_MODE_FEASIBILITY = {
+    None: AssemblyMode.FEASIBILITY_UNKNOWN,
+    "start": AssemblyMode.FEASIBILITY_START,
+    "same_patch": AssemblyMode.FEASIBILITY_SAME_PATCH,
+    "connected": AssemblyMode.FEASIBILITY_CONNECTED,
+    "other_aspect": AssemblyMode.FEASIBILITY_OTHER_ASPECT,
+    "unreachable": AssemblyMode.FEASIBILITY_UNREACHABLE,
+}
+
+
+def _assembly_mode_msg(mechanism, mode):
+    """A core :class:`~rpr3_gwr_core.planning.AssemblyMode` as a message."""
+    *joints, coordinate = mode.configuration
+    located = mode.patch is not None
+    return AssemblyMode(
+        configuration=Configuration(joint_names=list(mechanism.joint_names),
+                                    positions=[float(v) for v in joints], mode=coordinate),
+        pose=pose_msg(mechanism, mode.pose), aspect=mode.aspect, signed_margin=mode.margin,
+        located=located, patch=mode.patch if located else 0,
+        region=mode.region if located else 0, layer=mode.layer if located else 0,
+        unlocated=mode.unlocated, feasibility=_MODE_FEASIBILITY[mode.feasibility])
+
+
+def _failed(response, code, message):
+    response.success = False
+    response.error_code = code
+    response.error_msg = message
+    return response
 
 
 def _error(response, code, message, feasibility=PlanPath.Response.FEASIBILITY_UNKNOWN):

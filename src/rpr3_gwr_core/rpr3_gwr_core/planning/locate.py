@@ -27,7 +27,7 @@ from ..exceptions import (AssemblyModeError, FixedJointMismatchError, InvalidInp
                           NoSolutionError, SingularityError)
 from .validation import DEFAULT_MAX_STEP, DEFAULT_MIN_MARGIN, validate_path
 
-__all__ = ["Location", "locate", "DEFAULT_MODE_TOL", "FIXED_JOINT_TOL"]
+__all__ = ["Location", "locate", "check_on_grid", "DEFAULT_MODE_TOL", "FIXED_JOINT_TOL"]
 
 # One degree, for an angular mode coordinate [rad].
 DEFAULT_MODE_TOL = math.radians(1.0)
@@ -79,6 +79,32 @@ class Location:
                 f"cell {self.cell}, signed margin {self.margin:.3g})")
 
 
+def check_on_grid(roadmap, joints):
+    """Check that joints lie on a roadmap's grid: values the mechanism takes,
+    those the grid fixes within :data:`FIXED_JOINT_TOL` of its values, the
+    others in its box.
+
+    Parameters
+    ----------
+    roadmap : Roadmap
+    joints : ndarray, shape (n_joints,)
+        Finite [joint unit].
+
+    Raises
+    ------
+    InvalidInputError, FixedJointMismatchError, OutOfGridError
+    """
+    mechanism, grid = roadmap.mechanism, roadmap.grid
+    mechanism.check_joints(joints)
+    for joint, value in grid.fixed:
+        if abs(joints[joint] - value) > FIXED_JOINT_TOL * max(1.0, abs(value)):
+            name = mechanism.joint_names[joint]
+            raise FixedJointMismatchError(
+                f"{name} = {joints[joint]} but the roadmap is built for {name} = {value} "
+                f"(a value within {FIXED_JOINT_TOL:g} x max(1, |{value:g}|) is taken as its)")
+    grid.cell_of(joints)  # raises OutOfGridError
+
+
 def locate(roadmap, configuration, mode_tol=DEFAULT_MODE_TOL, min_margin=DEFAULT_MIN_MARGIN,
            max_step=DEFAULT_MAX_STEP):
     """Find the assembly mode, cell and patch of a configuration.
@@ -120,14 +146,7 @@ def locate(roadmap, configuration, mode_tol=DEFAULT_MODE_TOL, min_margin=DEFAULT
     if not all(math.isfinite(v) for v in values):
         raise InvalidInputError(f"configuration has NaN or infinity: {values}")
     joints, wanted = np.array(values[:-1]), values[-1]
-    mechanism.check_joints(joints)
-    for joint, value in grid.fixed:
-        if abs(joints[joint] - value) > FIXED_JOINT_TOL * max(1.0, abs(value)):
-            name = mechanism.joint_names[joint]
-            raise FixedJointMismatchError(
-                f"{name} = {joints[joint]} but the roadmap is built for {name} = {value} "
-                f"(a value within {FIXED_JOINT_TOL:g} x max(1, |{value:g}|) is taken as its)")
-    grid.cell_of(joints)  # raises OutOfGridError
+    check_on_grid(roadmap, joints)
     count, solutions = mechanism.solve(joints[None, :])
     poses = solutions[0, :count[0]]
     if len(poses) == 0:

@@ -18,6 +18,7 @@ import numpy as np
 from ..exceptions import (AssemblyModeError, InvalidInputError, NoSolutionError,
                           SingularityError)
 from .global_planning import feasibility
+from .locate import check_on_grid
 
 __all__ = ["AssemblyMode", "assembly_modes"]
 
@@ -121,7 +122,7 @@ def assembly_modes(planner, joints, start_mode=None, mode_tol=None):
     if joints.shape != (mechanism.n_joints,) or not np.all(np.isfinite(joints)):
         raise InvalidInputError(f"joints are {mechanism.n_joints} finite numbers "
                                 f"{list(mechanism.joint_names)}, got {joints.tolist()}")
-    mechanism.check_joints(joints)
+    check_on_grid(planner.roadmap, joints)
     count, solutions = mechanism.solve(joints[None])
     poses = solutions[0, :count[0]]
     if not len(poses):
