@@ -115,6 +115,11 @@ def _solution(mechanism, joints, mode):
     return poses[np.argmin(np.abs(gap))]
 
 
+def _cross(u, v):
+    """The z component of the cross product of two plane vectors."""
+    return u[0] * v[1] - u[1] * v[0]
+
+
 def _arc(ax, centre, start, end, radius, label, colour=_NOTE_COLOUR):
     """An angle from direction ``start`` to ``end`` [rad] at a point, as an
     arc with an arrow head and its label beyond the middle."""
@@ -177,7 +182,7 @@ def _mechanism_drawing(name, joints, mode):
             ax.plot(*np.stack([a, b]).T, "-", color="white", lw=2)
         angle[ends] = math.atan2(*(b - a)[::-1])
         # Labels on the side away from the drawing's centre.
-        side = 1.0 if np.cross(b - a, centre - a) < 0 else -1.0
+        side = 1.0 if _cross(b - a, centre - a) < 0 else -1.0
         if kind == "3-RPR":
             label = mechanism.joint_names[leg]
         elif link.startswith("proximal"):
@@ -231,7 +236,7 @@ def _mechanism_drawing(name, joints, mode):
         b1, b2, b3 = (points[f"B{k}"] for k in (1, 2, 3))
         inside = (b1 + b2 + b3) / 3
         for far, key in ((b2, "d1"), (b3, "d3")):
-            side = 1.0 if np.cross(far - b1, inside - b1) < 0 else -1.0
+            side = 1.0 if _cross(far - b1, inside - b1) < 0 else -1.0
             _along(ax, b1, far, key, side, colour="tab:brown", scale=scale)
         alpha, beta = pose[2], parameters["beta"]
         _arc(ax, b1, alpha, alpha + beta, 0.1 * scale, "beta", colour="tab:brown")
