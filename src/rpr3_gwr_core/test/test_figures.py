@@ -352,6 +352,27 @@ def test_a_plan_figure_on_a_slice_marks_its_cusps(coarse_paper_roadmap):
     assert marks[0].get_marker() == "^"
 
 
+def test_a_global_path_not_planned_is_drawn_across_the_seam_the_short_way(rrr_slice):
+    """The seam plan's patch drawn as a second global path, along cells of
+    the patch: across th2's seam, not a turn back round."""
+    seg, grid = rrr_slice.segmentation, rrr_slice.grid
+    plan = plan_across_the_seam(rrr_slice)
+    plan["global_paths"] = plan["global_paths"] * 2
+    line = drawn_global_path(plan_figure(rrr_slice, plan).axes[0], 1).get_xydata()
+    # Its vertices but the ends of the pieces at the bounds of the turn drawn.
+    bounds = np.degrees(grid.axes[0].low - grid.axes[0].step / 2) + np.array([0.0, 360.0])
+    vertices = line[np.all(np.isfinite(line), axis=1)
+                    & ~np.any(np.isclose(line[:, :1], bounds), axis=1)]
+    assert len(vertices) >= 2
+    (patch,) = plan["global_paths"][0]
+    assert np.isin(grid.cells_of(np.radians(vertices)), seg.patches[patch].cells).all()
+    steps = np.diff(line, axis=0)
+    steps = steps[np.all(np.isfinite(steps), axis=1)]
+    assert np.all(np.abs(steps) <= 180.0)
+    joints = np.degrees(grid.unwrap([w["joints"] for w in plan["waypoints"]]))[:, 1:]
+    assert np.linalg.norm(steps, axis=1).sum() < 2 * np.linalg.norm(joints[-1] - joints[0])
+
+
 def check_space_plan_figure(figure, roadmap, plan, tmp_path):
     """The plan figure off a 2-D grid: the joints in 3-D, the pose track in
     3-D, every joint against the path, the global paths and ends in the

@@ -905,11 +905,13 @@ def _path_lines(roadmap, track, paths, chosen):
 def _cell_path(roadmap, path, start, goal):
     """A polyline through the cells of a global path's patches, in order.
 
-    The shortest path (in grid steps) over solutions of the path's patches,
-    from the cell nearest the start in its first patch to the cell nearest
-    the goal in its last, moving between face-adjacent cells along the
-    solution's continuation inside a patch and from one patch to the next
-    only across a face of their gate.  It is drawn through the cells on
+    The least-cost path over solutions of the path's patches, from the cell
+    nearest the start in its first patch to the cell nearest the goal in its
+    last, moving between face-adjacent cells along the solution's
+    continuation inside a patch and from one patch to the next only across
+    a face of their gate (across the seams of turning joints too); a step
+    costs its length in grid steps, more near the patches' edges
+    (``_EDGE_COST``, ``_EDGE_REACH``).  It is drawn through the cells on
     both sides of each gate face it crosses and, between them, through as
     few of its cells as keep every straight segment within cells of the
     path's patches (and below a quarter turn in every turning joint and
