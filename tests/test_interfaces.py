@@ -15,12 +15,12 @@ def _interfaces():
 def test_the_package_ships_the_designed_interfaces():
     assert _interfaces() == [
         ("action", "ExecuteTrajectory"),
-        ("msg", "AssemblyMode"), ("msg", "AxisLinks"), ("msg", "Configuration"), ("msg", "Cusp"), ("msg", "FixedJoint"),
-        ("msg", "Gate"), ("msg", "GlobalPath"), ("msg", "Grid"), ("msg", "GridAxis"),
-        ("msg", "JointRange"), ("msg", "Mechanism"), ("msg", "MechanismParameter"),
-        ("msg", "NSolutionField"), ("msg", "Obstacle"), ("msg", "PlatformPose"),
-        ("msg", "Scene"), ("msg", "WorkspacePatch"),
-        ("msg", "WorkspaceRoadmap"),
+        ("msg", "AssemblyMode"), ("msg", "AxisLinks"), ("msg", "Configuration"), ("msg", "Cusp"),
+        ("msg", "FixedJoint"), ("msg", "Gate"), ("msg", "GlobalPath"), ("msg", "Grid"),
+        ("msg", "GridAxis"), ("msg", "JointRange"), ("msg", "Mechanism"),
+        ("msg", "MechanismParameter"), ("msg", "NSolutionField"), ("msg", "Obstacle"),
+        ("msg", "PlannedPath"), ("msg", "PlatformPose"), ("msg", "Scene"),
+        ("msg", "WorkspacePatch"), ("msg", "WorkspaceRoadmap"),
         ("srv", "AssemblyModes"), ("srv", "PlanPath"), ("srv", "ResetDriver"),
     ]
 

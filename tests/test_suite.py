@@ -19,7 +19,8 @@ from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY
 from scipy.optimize import brentq
 from rosbags.typesys import Stores, get_typestore
 from rpr3_gwr_msgs.action import ExecuteTrajectory
-from rpr3_gwr_msgs.msg import Configuration, NSolutionField, WorkspaceRoadmap
+from rclpy.serialization import deserialize_message
+from rpr3_gwr_msgs.msg import Configuration, NSolutionField, PlannedPath, WorkspaceRoadmap
 from rpr3_gwr_msgs.srv import PlanPath
 from rpr3_gwr_nodes.client import PlannerClient
 from rpr3_gwr_nodes.planner import PlannerNode
@@ -193,12 +194,46 @@ def test_whole_chain_plan_execute_record(suite):
     typestore = get_typestore(Stores.ROS2_JAZZY)
     with Reader(suite.recorder.bag_path) as reader:
         topics = {c.topic: c for c in reader.connections}
-        assert set(topics) == {"/planned_trajectory", "/joint_states"}
+        assert set(topics) == {"/planned_trajectory", "/planned_path", "/joint_states"}
         recorded = [typestore.deserialize_cdr(raw, c.msgtype)
                     for c, _, raw in reader.messages(connections=[topics["/planned_trajectory"]])]
         states = sum(1 for _ in reader.messages(connections=[topics["/joint_states"]]))
     assert any([list(p.positions) for p in msg.points] == sent for msg in recorded)
     assert states > 0
+
+
+def test_a_recorded_plan_replays_from_the_bag_alone(suite, tmp_path):
+    """A bag holds each plan's start and goal, mode coordinate included: the
+    driver is put at the recorded start and executes the recorded
+    trajectory, an assembly-mode change, to the recorded goal."""
+    before = suite.planner.path_pub.get_subscription_count()
+    recorder = suite.add(TrajectoryRecorder(context=suite.context, parameter_overrides=[
+        Parameter("bag_path", value=str(tmp_path / "bag"))]))
+    deadline = time.monotonic() + 10.0
+    while suite.planner.path_pub.get_subscription_count() <= before \
+            and time.monotonic() < deadline:
+        time.sleep(0.05)
+    response = suite.plan(MODE_A, MODE_B)
+    assert response.success, response.error_msg
+    deadline = time.monotonic() + 10.0
+    while not recorder.counts["planned_path"] and time.monotonic() < deadline:
+        time.sleep(0.05)
+    suite.executor.remove_node(recorder)
+    recorder.close_bag()
+    with Reader(recorder.bag_path) as reader:
+        connection = next(c for c in reader.connections if c.topic == "/planned_path")
+        assert connection.msgtype == "rpr3_gwr_msgs/msg/PlannedPath"
+        recorded = [deserialize_message(raw, PlannedPath)
+                    for _, _, raw in reader.messages(connections=[connection])]
+    assert len(recorded) == 1
+    plan = recorded[0]
+    assert (list(plan.start.positions), plan.start.mode) == (list(MODE_A[:3]), MODE_A[3])
+    reset = suite.client.reset_driver(plan.start, timeout_sec=TIMEOUT)
+    assert reset.success, reset.error_msg
+    result = suite.execute(plan.trajectory)
+    assert result.error_code == ExecuteTrajectory.Result.SUCCESS, result.error_msg
+    assert abs(math.remainder(result.final_pose.values[2] - plan.goal.mode, 2 * math.pi)) \
+        < D(0.05)
 
 
 @pytest.mark.parametrize("start, code", [

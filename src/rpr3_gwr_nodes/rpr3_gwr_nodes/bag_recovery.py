@@ -22,7 +22,8 @@ import tempfile
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.rosbag2.storage_mcap import McapReader
 from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader
-from rosbags.typesys import Stores, get_typestore
+
+from .bag_types import suite_typestore
 
 __all__ = ["BagRecoveryError", "recover_bag", "main"]
 
@@ -102,14 +103,14 @@ def _rewrite(reader, target, plugin):
 
 def _type_hash(connection):
     """The connection's RIHS01 type hash; MCAP files do not store it, so it
-    comes from the Jazzy message types then."""
+    comes from the Jazzy message types and the suite's then."""
     if connection.digest:
         return connection.digest
     try:
-        return get_typestore(Stores.ROS2_JAZZY).hash_rihs01(connection.msgtype)
+        return suite_typestore().hash_rihs01(connection.msgtype)
     except KeyError:
-        raise BagRecoveryError(f"{connection.msgtype} is not a ROS 2 Jazzy message type: "
-                               "its type hash is unknown") from None
+        raise BagRecoveryError(f"{connection.msgtype} is neither a ROS 2 Jazzy message type "
+                               "nor the suite's: its type hash is unknown") from None
 
 
 def _close_mcap(source, target):

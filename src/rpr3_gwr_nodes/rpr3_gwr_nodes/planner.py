@@ -34,7 +34,8 @@ in one layer may not cross); empty (the default), any mechanism is planned
 on, each leg in a layer of its own.  Each response names the
 roadmap that answered it (its stamp and the joints it fixes).  Each planned
 trajectory is also published on ``planned_trajectory``
-(trajectory_msgs/JointTrajectory) for recording, and drawn on
+(trajectory_msgs/JointTrajectory) and, with the plan's start and goal, on
+``planned_path`` (rpr3_gwr_msgs/PlannedPath) for recording, and drawn on
 ``planned_path_markers`` (visualization_msgs/MarkerArray: the platform's
 track in ``base``, the joint path in ``joint_space``).
 
@@ -75,8 +76,8 @@ from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
 from rpr3_gwr_core.io.paths import default_cache_dir
 from rpr3_gwr_core.planning import (DEFAULT_CLEARANCE, PlanningIndex, PlanOptions, Planner,
                                     Retries, Termination, assembly_modes, planning_index)
-from rpr3_gwr_msgs.msg import (AssemblyMode, Configuration, GlobalPath, NSolutionField, Scene,
-                               WorkspaceRoadmap)
+from rpr3_gwr_msgs.msg import (AssemblyMode, Configuration, GlobalPath, NSolutionField,
+                               PlannedPath, Scene, WorkspaceRoadmap)
 from rpr3_gwr_msgs.srv import AssemblyModes, PlanPath
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
@@ -103,8 +104,10 @@ Plans singularity-free joint trajectories on the roadmap it receives (it
 computes none): answers ERROR_NO_ROADMAP until the first one is loaded.
 
 Subscribes  field, roadmap (the builder's, latched), scene (latched)
-Serves      plan_path (rpr3_gwr_msgs/srv/PlanPath)
-Publishes   planned_trajectory, planned_path_markers, ~/current_scene
+Serves      plan_path (rpr3_gwr_msgs/srv/PlanPath), assembly_modes
+            (rpr3_gwr_msgs/srv/AssemblyModes)
+Publishes   planned_trajectory, planned_path (with the plan's ends),
+            planned_path_markers, ~/current_scene
 Parameters  clearance (0.02), default_max_velocity (1.0),
             default_max_acceleration (2.0), default_time_limit (10.0 s),
             plan_workers (one per core, read-only), mechanism_file ('' takes
@@ -309,6 +312,8 @@ class PlannerNode(Node):
                                  callback_group=updates)
         self.scene_pub = self.create_publisher(Scene, "~/current_scene", LATCHED_QOS)
         self.trajectory_pub = self.create_publisher(JointTrajectory, "planned_trajectory", 10)
+        # The same with the plan's ends: a recorded plan replays alone.
+        self.path_pub = self.create_publisher(PlannedPath, "planned_path", 10)
         self.marker_pub = self.create_publisher(MarkerArray, "planned_path_markers", 10)
         self.create_service(PlanPath, "plan_path", self._on_plan, qos_profile=SERVICE_QOS,
                             callback_group=ReentrantCallbackGroup())
@@ -581,6 +586,10 @@ class PlannerNode(Node):
         # Converting messages for no one would cost every request.
         if not options.feasibility_only and self.trajectory_pub.get_subscription_count():
             self.trajectory_pub.publish(response.trajectory)
+        if not options.feasibility_only and self.path_pub.get_subscription_count():
+            self.path_pub.publish(PlannedPath(
+                header=response.trajectory.header, start=request.start, goal=request.goal,
+                trajectory=response.trajectory, poses=response.poses))
         if not options.feasibility_only and self.marker_pub.get_subscription_count():
             self.marker_pub.publish(path_markers(state.planner.roadmap.grid, plan.joints,
                                                  plan.poses, response.trajectory.header.stamp))

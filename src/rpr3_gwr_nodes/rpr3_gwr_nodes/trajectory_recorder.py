@@ -1,6 +1,13 @@
 """trajectory_recorder: records planned paths (and, on request, the driver's
 joint states) to a rosbag2 bag.
 
+Each plan is recorded twice: its trajectory (``planned_trajectory``, a
+standard type any tool reads) and the whole plan with its start and goal
+configurations, mode coordinate included (``planned_path``,
+rpr3_gwr_msgs/PlannedPath), so that a bag alone says where the driver must
+stand to replay it.  The bag describes the suite's types with the
+definitions of the installed rpr3_gwr_msgs.
+
 Messages are taken serialized from DDS (``raw=True``) and written unchanged,
 by a thread of its own (the storage may only be used by the thread that
 opened it, whatever executor spins the node), with the ``rosbags`` library,
@@ -34,11 +41,12 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.rosbag2.storage_sqlite3 import Sqlite3Writer
-from rosbags.typesys import Stores, get_typestore
+from rpr3_gwr_msgs.msg import PlannedPath
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
+from .bag_types import suite_typestore
 from .profiles import LATCHED_QOS, SENSOR_QOS
 from .spin import run
 
@@ -51,8 +59,9 @@ Records the planner's trajectories (and, on request, the driver's joint
 states and the suite's markers) to a rosbag2 bag, flushed every
 flush_period and closed cleanly on SIGINT.
 
-Subscribes  planned_trajectory; joint_states with record_joint_states;
-            markers and field maps with record_visualization
+Subscribes  planned_trajectory, planned_path; joint_states with
+            record_joint_states; markers and field maps with
+            record_visualization
 Parameters  bag_path (rpr3_gwr_bags/<date>_<time>, must not exist), storage
             (sqlite3 or mcap), record_joint_states (false),
             record_visualization (false), flush_period (0.5 s); all
@@ -99,7 +108,8 @@ class TrajectoryRecorder(Node):
         self.bag_path = pathlib.Path(self.get_parameter("bag_path").value).resolve()
         self.bag_path.parent.mkdir(parents=True, exist_ok=True)
         topics = {"planned_trajectory": (JointTrajectory, "trajectory_msgs/msg/JointTrajectory",
-                                         10)}
+                                         10),
+                  "planned_path": (PlannedPath, "rpr3_gwr_msgs/msg/PlannedPath", 10)}
         if self.get_parameter("record_joint_states").value:
             topics["joint_states"] = (JointState, "sensor_msgs/msg/JointState", SENSOR_QOS)
         if self.get_parameter("record_visualization").value:
@@ -121,7 +131,7 @@ class TrajectoryRecorder(Node):
     def _write_loop(self, storage, topics, flush_period, opened):
         writer = Writer(self.bag_path, version=9, storage_plugin=storage)
         writer.open()
-        typestore = get_typestore(Stores.ROS2_JAZZY)
+        typestore = suite_typestore()
         connections = {topic: writer.add_connection(name, type_name, typestore=typestore)
                        for topic, (name, type_name) in topics.items()}
         _make_durable(writer)
