@@ -28,6 +28,7 @@ setup(
             "trajectory_recorder = rpr3_gwr_nodes.trajectory_recorder:main",
             "scene_publisher = rpr3_gwr_nodes.scene_publisher:main",
             "rpr3_gwr_recover_bag = rpr3_gwr_nodes.bag_recovery:main",
+            "suite = rpr3_gwr_nodes.suite_launcher:main",
         ],
     },
 )
