@@ -24,6 +24,13 @@ root="$(dirname "$ws")"
 
 log() { printf 'rpr3-gwr setup: %s\n' "$*" >&2; }
 
+# In a shell that sourced env.sh the environment's interpreter comes first on
+# the PATH, and the set-up may remove that environment: look past it.
+if [ -n "${VIRTUAL_ENV:-}" ]; then
+  PATH="$(printf '%s' "$PATH" | tr ':' '\n' | grep -vxF "$VIRTUAL_ENV/bin" | paste -sd: -)"
+  unset VIRTUAL_ENV
+fi
+
 # Run a long step ("$1" names it) with the time it has taken shown, so that a
 # quiet pip or a rosidl generation never looks hung: one line rewritten in
 # place when stderr is a terminal, a log line every 15 s otherwise.
