@@ -73,8 +73,7 @@ class MechanismFile:
                          else f"{name} [{a.low:g}, {a.high:g}] step {a.step:g}"
                          for name, a in zip(self.mechanism.joint_names, self.axes))
         return (f"MechanismFile({self.mechanism.kind}: {box}; "
-                f"{'default bodies' if self.bodies is None else 'bodies of its own'}"
-                f"{'' if self.home is None else '; a home'})")
+                f"{'default bodies' if self.bodies is None else 'bodies of its own'})")
 
     def default_home(self, samples=HOME_SAMPLES):
         """The configuration to start at: the file's ``home``, else the
