@@ -4,9 +4,10 @@ the planar 3-RPR first, without ROS.
 The layers, bottom up: :mod:`.mechanisms` (the mechanism interface and the
 3-RPR), :mod:`.workspace` (grid, n-solution field, continuity, rotary disk
 search, segmentation, roadmap), :mod:`.planning` (locate, global and local
-paths, smoothing, timing, validation, the planner) and :mod:`.io` (JSON and
-GEXF, the cache, figures, the ``rpr3-gwr`` tool); :mod:`.paper` holds the
-paper's setting.
+paths, smoothing, timing, validation, the planner), :mod:`.world` (bodies,
+scenes, collisions), :mod:`.figures` and :mod:`.io` (JSON and GEXF, the
+cache, mechanism and scene files, the ``rpr3-gwr`` tool); :mod:`.paper`
+holds the paper's setting.
 
 Examples
 --------
@@ -25,7 +26,7 @@ own: its two global paths go through regions 6, 4, 2, 1 and 6, 5, 2, 1.
 True
 """
 
-from ._lazy import lazy_exports
+from .lazy import lazy_exports
 
 # Names are loaded on first use (PEP 562), so that ``rpr3-gwr --help`` and
 # light modules such as the exceptions do not load numpy and the compiled
@@ -37,8 +38,9 @@ _SOURCES = {
     ".paper": ("PAPER_GEOMETRY", "PAPER_GRID", "rho1_slice"),
     ".workspace": ("Axis", "Grid", "compute_field", "build_roadmap", "Roadmap",
                    "aspect_groups"),
-    ".planning": ("Planner", "PlanOptions", "Plan", "Termination", "assembly_modes"),
-    ".exceptions": ("GWRError", "InvalidInputError", "OutOfGridError",
+    ".planning": ("Planner", "PlanOptions", "Plan", "Termination", "assembly_modes",
+                  "PoseEnd", "working_modes", "resolve_ends"),
+    ".exceptions": ("GWRError", "InvalidInputError", "GridSizeError", "OutOfGridError",
                     "FixedJointMismatchError", "NoSolutionError", "AssemblyModeError",
                     "SingularityError", "InfeasiblePathError", "CollisionError",
                     "ValidationError", "PlanningTimeoutError"),

@@ -8,16 +8,21 @@ map an error to their own error constants without parsing messages.
 __all__ = [
     "GWRError",
     "InvalidInputError",
+    "GridSizeError",
     "OutOfGridError",
     "FixedJointMismatchError",
     "NoSolutionError",
     "AssemblyModeError",
     "SingularityError",
     "InfeasiblePathError",
+    "INFEASIBLE_REASONS",
     "CollisionError",
     "ValidationError",
     "PlanningTimeoutError",
 ]
+
+
+INFEASIBLE_REASONS = ("other_aspect", "unreachable", "blocked")
 
 
 class GWRError(Exception):
@@ -30,6 +35,23 @@ class InvalidInputError(GWRError, ValueError):
     """An argument is malformed: NaN, infinite, negative, wrong shape."""
 
     code = "INVALID_INPUT"
+
+
+class GridSizeError(InvalidInputError):
+    """A grid would have more cells (or lattice points) than its limit.
+
+    Attributes
+    ----------
+    size : int
+        The cells or points it would have.
+    limit : int
+        The most it may have.
+    """
+
+    def __init__(self, message, size, limit):
+        super().__init__(message)
+        self.size = size
+        self.limit = limit
 
 
 class OutOfGridError(GWRError, ValueError):
@@ -63,9 +85,33 @@ class SingularityError(GWRError, ValueError):
 
 
 class InfeasiblePathError(GWRError):
-    """The roadmap connects no path between two configurations."""
+    """The roadmap connects no path between two configurations.
+
+    Parameters
+    ----------
+    message : str
+    reason : str, optional
+        Why, where the roadmap's graph says it: one of
+        :data:`INFEASIBLE_REASONS` ("other_aspect": the ends lie in two
+        aspects; "unreachable": in two components of one; "blocked": a scene
+        cuts every way).  None where the graph joins the ends and no cell
+        search does.  Callers (the CLI, the planner node) map it to their
+        own feasibility codes.
+
+    Raises
+    ------
+    ValueError
+        If ``reason`` is neither None nor one of :data:`INFEASIBLE_REASONS`.
+    """
 
     code = "INFEASIBLE"
+
+    def __init__(self, message, reason=None):
+        if reason is not None and reason not in INFEASIBLE_REASONS:
+            raise ValueError(f"an infeasible path's reason is one of {INFEASIBLE_REASONS}, "
+                             f"got {reason!r}")
+        super().__init__(message)
+        self.reason = reason
 
 
 class CollisionError(GWRError, ValueError):

@@ -194,18 +194,3 @@ class MovingBaseReference:
                 q = target
             count_end, poses_end = mechanism.solve(q[None])
             assert np.min(np.max(np.abs(poses_end[0, : count_end[0]] - pose), -1)) < 1e-8
-
-
-def check_kernel_agrees_with_step(mechanism, kernel, joints, target, n_parameters):
-    """The compiled step kernel gives :meth:`step`'s pose and margin."""
-    count, poses = mechanism.solve(np.array([joints]))
-    compiled, parameters = mechanism.step_kernel
-    assert compiled is not None and parameters.shape == (n_parameters,)
-    for pose in poses[0, : count[0]]:
-        expected = mechanism.step(pose, joints, target)
-        buffer = pose.copy()
-        margin = kernel(parameters, buffer, np.array(joints), target)
-        assert expected is not None
-        assert np.allclose(buffer, expected[0], rtol=0, atol=1e-13)
-        assert margin == pytest.approx(expected[1], abs=1e-13)
-    return poses[0, : count[0]]

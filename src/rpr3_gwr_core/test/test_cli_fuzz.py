@@ -5,7 +5,10 @@ stdout, or fails with code 1 or 2 and exactly one error: an ``error`` object
 on stdout (a plan that cannot be made) or one line on stderr, after the
 progress lines of a build that ran for seconds; never a traceback, never a
 numpy warning.  The fuzz calls ``main`` in this process;
-a broken pipe is tried on the installed console script.
+a broken pipe is tried on the installed console script.  Scene and
+mechanism files of any content (bytes that are not UTF-8, YAML nested past
+what a parser follows, numbers beyond any float) fail with code 2 and one
+line.
 
 Every argument that could start a long build is drawn from pools whose valid
 values make small grids ('roadmap' always has a step, of 0.5 or more when
@@ -17,6 +20,7 @@ where an argument error comes first.
 import contextlib
 import io
 import json
+import pathlib
 import shutil
 import subprocess
 import warnings
@@ -27,6 +31,12 @@ from hypothesis import example, given, settings, strategies as st
 from rpr3_gwr_core.io.cli import main
 
 PAPER_START, PAPER_GOAL = ["12", "18", "122.82"], ["10", "25", "-24.24"]
+# The same two configurations as poses (B1 and alpha [deg]), on the slice rho1 = 17.
+PAPER_START_POSE = ["14.2844098014", "-9.21713820156", "122.818069928"]
+PAPER_GOAL_POSE = ["0.329281929849", "16.9968106835", "-24.2435688728"]
+# Working modes: the 3-RPR's one, others' and malformed ones ("---" reads as an option).
+WORKING_MODE = st.sampled_from(["+++", "=+++", "=---", "---", "+-", "x", "", "=+-+"])
+CONFIG = pathlib.Path(__file__).resolve().parents[3] / "config"
 
 
 def _mostly(usual, rare):
@@ -126,6 +136,7 @@ def _without_progress(err):
 
 
 def _check(argv):
+    """Check the answer to ``argv``; its exit code, stdout and stderr."""
     code, out, err = _run(argv)
     assert "Traceback" not in err, (argv, err)
     err = _without_progress(err)
@@ -138,6 +149,7 @@ def _check(argv):
     else:
         assert err.startswith("rpr3-gwr") and ": error: " in err, (argv, err)
         assert err.count("\n") == 1 and err.endswith("\n"), (argv, err)
+    return code, out, err
 
 
 def _out_file(files):
@@ -170,6 +182,13 @@ def _dk():
     return _mostly(_numbers(3, 3), _numbers(0, 4)).map(lambda numbers: ["dk", *numbers])
 
 
+def _ik():
+    files = st.sampled_from([[]] + [["--mechanism", str(CONFIG / name)] for name in
+                                    ("five_bar.yaml", "three_rrr.yaml", "three_prr.yaml")])
+    return st.tuples(_mostly(_numbers(3, 3), _numbers(0, 4)), files).map(
+        lambda case: ["ik", *case[1], *case[0]])
+
+
 def _roadmap(files):
     figure = _figure_file(files)
     options = _options({
@@ -189,14 +208,31 @@ def _roadmap(files):
 def _plan(draw, files):
     legs = _mostly(st.one_of(st.sampled_from([PAPER_START, PAPER_GOAL]), _numbers(3, 3)),
                    _numbers(0, 5))
+    poses = _mostly(st.sampled_from([PAPER_START_POSE, PAPER_GOAL_POSE]), _numbers(0, 4))
     start, goal = draw(legs), draw(legs)
+    # Each end as joints or as a pose, sometimes both (refused).
+    ends = [draw(st.sampled_from([(f"--{end}",), (f"--{end}",), (f"--{end}-pose",),
+                                  (f"--{end}", f"--{end}-pose")])) for end in ("start", "goal")]
+    modes = {f"--{end}-working-mode": WORKING_MODE for end in ("start", "goal")}
     argv = draw(_options({
         "--rho1": SLICE_RHO1, "--start": st.just(start), "--goal": st.just(goal),
+        "--start-pose": poses, "--goal-pose": poses, **modes,
         "--smooth": st.just([]), "--weighted": st.just([]), "--feasibility-only": st.just([]),
         "--max-velocity": _mostly(st.tuples(NUMBER, NUMBER).map(
             lambda limits: [limits[0], "--max-acceleration", limits[1]]), NUMBER),
+        "--joint-limit": st.tuples(st.sampled_from(["rho1", "rho2", "rho3", "th1", "", "rho2="]),
+                                   NUMBER, NUMBER).map(
+            lambda limit: [f"{limit[0]}={limit[1]},{limit[2]}"]),
         "--alpha-tol-deg": NUMBER,
-        "-o": _out_file(files)}, required=("--start", "--goal")))
+        "-o": _out_file(files)}, required=ends[0] + ends[1]))
+    # A working mode drawn as "=SIGNS" is written --option=SIGNS.
+    written = []
+    for arg in argv:
+        if arg.startswith("=") and written and written[-1].endswith("-working-mode"):
+            written[-1] += arg
+        else:
+            written.append(arg)
+    argv = written
     # --full with four legs in both would build the full roadmap.
     if (len(start), len(goal)) != (4, 4) and draw(st.integers(0, 5)) == 5:
         argv.append("--full")
@@ -222,6 +258,7 @@ def _cusps():
     return st.one_of(trace, plain).map(lambda argv: ["cusps", *argv])
 
 
+@pytest.mark.slow
 @settings(max_examples=150, deadline=None, database=None)
 @given(argv=_dk())
 @example(argv=["dk", "1e308", "1e308", "1e308"])
@@ -230,6 +267,7 @@ def test_dk_answers_json_or_one_error(argv):
     _check(argv)
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None, database=None)
 @given(data=st.data())
 @example(data=["roadmap", "--rho1", "1e308"])
@@ -243,25 +281,101 @@ def test_roadmap_answers_json_or_one_error(data, files):
     _check(data if isinstance(data, list) else data.draw(_roadmap(files)))
 
 
+@pytest.mark.slow
+@settings(max_examples=100, deadline=None, database=None)
+@given(argv=_ik())
+@example(argv=["ik", "1e308", "1e308", "1e308"])
+@example(argv=["ik", "--mechanism", str(CONFIG / "five_bar.yaml"), "0.5", "0.5"])
+def test_ik_answers_json_or_one_error(argv):
+    _check(argv)
+
+
+@pytest.mark.slow
 @settings(max_examples=100, deadline=None, database=None)
 @given(data=st.data())
+@example(data=["plan", "--start-pose", *PAPER_START_POSE, "--goal-pose", *PAPER_GOAL_POSE])
+@example(data=["plan", "--start-pose", *PAPER_START_POSE, "--goal", *PAPER_GOAL,
+               "--start-working-mode=+-+"])
 @example(data=["plan", "--rho1", "1e308", "--start", *PAPER_START, "--goal", *PAPER_GOAL])
 @example(data=["plan", "--start", *PAPER_START, "--goal", *PAPER_GOAL, "--smooth"])
 def test_plan_answers_json_or_one_error(data, files):
     _check(data if isinstance(data, list) else data.draw(_plan(files)))
 
 
+@pytest.mark.slow
 @settings(max_examples=40, deadline=None, database=None)
 @given(data=st.data())
 def test_plot_answers_json_or_one_error(data, files):
     _check(data.draw(_plot(files)))
 
 
+@pytest.mark.slow
 @settings(max_examples=30, deadline=None, database=None)
 @given(data=st.data())
 @example(data=["cusps", "--trace", "12", "18", "1", "--step", "1e308"])
 def test_cusps_answers_json_or_one_error(data):
     _check(data if isinstance(data, list) else data.draw(_cusps()))
+
+
+def _nested(depth):
+    return st.sampled_from([b"[" * depth + b"]" * depth, b"- " * depth + b"x\n",
+                            b"{a: " * depth + b"1" + b"}" * depth])
+
+
+def _huge_numbers(text):
+    """``text`` without its comments, one of its numbers made huge: digits
+    beyond any float, a float near its largest, or YAML 1.2's 1e300."""
+    text = "".join(line for line in text.splitlines(keepends=True)
+                   if not line.lstrip().startswith("#"))
+    numbers = sorted({word.strip("[],{}") for word in text.split()
+                      if word.strip("[],{}").replace(".", "", 1).isdigit()})
+    huge = st.sampled_from(["9" * 400, "-" + "9" * 400, "9" * 5000, "1.0e+200", "-1.0e+200",
+                            "1e300", "1.7e+308"])
+    return st.tuples(st.sampled_from(numbers), huge).map(
+        lambda swap: text.replace(swap[0], swap[1], 1).encode())
+
+
+def _invalid_file(text):
+    """Contents that are never a valid file: ``text`` in another encoding,
+    with a number beyond range, or YAML nested deeply."""
+    return st.one_of(
+        st.sampled_from(["utf-16", "utf-16-le", "utf-32"]).map(text.encode),
+        st.just((text + "# caf\xe9\n").encode("latin-1")),
+        st.binary(max_size=200).map(lambda junk: b"\xff" + junk),
+        st.integers(1, 60_000).flatmap(_nested),
+        _huge_numbers(text))
+
+
+SCENE_TEXT = "obstacles:\n  - {id: post, disc: {center: [6.0, 28.0], radius: 2.0}}\n" \
+    "  - {id: plate, polygon: [[-20, 24], [-12, 24], [-12, 30], [-20, 30]]}\n" \
+    "limits: {obstacle_clearance: 0.5}\n"
+
+
+def _file_argv(files, content, argv):
+    path = files / "hostile.yaml"
+    path.write_bytes(content)
+    return [str(path) if word == "FILE" else word for word in argv]
+
+
+@pytest.mark.slow
+@settings(max_examples=60, deadline=None, database=None)
+@given(content=st.one_of(_invalid_file(SCENE_TEXT), st.binary(max_size=300)))
+def test_a_scene_file_of_any_content_answers_json_or_one_error(content, files):
+    code, _, err = _check(_file_argv(files, content, ["roadmap", "--step", "5",
+                                                      "--scene", "FILE"]))
+    if content.startswith(b"\xff") or b"[[[" in content or b"9" * 300 in content:
+        assert code == 2, err
+
+
+@pytest.mark.slow
+@settings(max_examples=60, deadline=None, database=None)
+@given(content=st.one_of(_invalid_file((CONFIG / "paper_3rpr.yaml").read_text()),
+                         st.binary(max_size=300)))
+def test_a_mechanism_file_of_any_content_answers_json_or_one_error(content, files):
+    code, _, err = _check(_file_argv(files, content, ["dk", "--mechanism", "FILE", "17", "20",
+                                                      "25"]))
+    if content.startswith(b"\xff") or b"[[[" in content or b"9" * 300 in content:
+        assert code == 2, err
 
 
 @pytest.fixture(scope="module")

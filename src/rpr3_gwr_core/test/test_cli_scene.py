@@ -12,7 +12,7 @@ import pytest
 import yaml
 from matplotlib.patches import Circle, Polygon
 
-from rpr3_gwr_core.io import figures
+from rpr3_gwr_core import figures
 from rpr3_gwr_core.io.cli import main
 from rpr3_gwr_core.world import BodyModel
 from test_world_reference import reference_blocked, reference_track, torus_platform

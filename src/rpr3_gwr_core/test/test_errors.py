@@ -1,11 +1,13 @@
 """Malformed input raises the package's own errors."""
 
 import math
+import pickle
 
 import numpy as np
 import pytest
 
-from rpr3_gwr_core.exceptions import GWRError, InvalidInputError, OutOfGridError
+from rpr3_gwr_core.exceptions import (INFEASIBLE_REASONS, GWRError, InfeasiblePathError,
+                                      InvalidInputError, OutOfGridError)
 from rpr3_gwr_core.paper import rho1_slice
 from rpr3_gwr_core.workspace import compute_field
 from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY, ThreeRPR, beta_from_sides
@@ -19,6 +21,18 @@ def test_invalid_input_error_is_a_gwr_error_and_a_value_error():
     assert issubclass(InvalidInputError, GWRError)
     assert issubclass(InvalidInputError, ValueError)
     assert issubclass(OutOfGridError, GWRError)
+
+
+@pytest.mark.parametrize("reason", [*INFEASIBLE_REASONS, None])
+def test_an_infeasible_path_keeps_its_reason_across_processes(reason):
+    # The plan workers send their errors to the node through a pipe.
+    error = pickle.loads(pickle.dumps(InfeasiblePathError("no path", reason)))
+    assert (type(error), str(error), error.reason) == (InfeasiblePathError, "no path", reason)
+
+
+def test_an_infeasible_path_refuses_a_reason_callers_cannot_map():
+    with pytest.raises(ValueError, match="other_aspect"):
+        InfeasiblePathError("no path", "far away")
 
 
 @pytest.mark.parametrize("pose", [[NAN, 1.0, 0.0], [1.0, INF, 0.0], [1.0, 2.0, -INF],

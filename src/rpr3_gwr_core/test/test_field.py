@@ -10,8 +10,8 @@ from hypothesis import given, settings, strategies as st
 from rpr3_gwr_core.paper import PAPER_GRID, rho1_slice
 from rpr3_gwr_core.workspace import Grid, build_roadmap, compute_field
 from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY
-from rpr3_gwr_core.mechanisms.rpr3 import MAX_SOLUTIONS
-from rpr3_gwr_core.mechanisms import rpr3
+from rpr3_gwr_core.mechanisms import three_leg_solver
+from rpr3_gwr_core.mechanisms.three_leg_solver import MAX_SOLUTIONS
 from rpr3_gwr_core.mechanisms.trig_roots import sampled_roots
 
 
@@ -111,7 +111,7 @@ def test_field_aspect_is_the_sign_of_margin_and_zero_where_none(small_field):
 def _full_sextic_field(monkeypatch, grid):
     """The field with every cell solved by the companion matrix."""
     with monkeypatch.context() as patch:
-        patch.setattr(rpr3, "sampled_roots", lambda coeffs, samples, slots: (
+        patch.setattr(three_leg_solver, "sampled_roots", lambda coeffs, samples, slots: (
             np.zeros(len(coeffs), dtype=bool), np.full((len(coeffs), slots), np.nan)))
         return compute_field(PAPER_GEOMETRY, grid)
 
@@ -145,7 +145,8 @@ def test_fast_field_equals_the_full_sextic_on_a_3d_grid(monkeypatch):
 
 def test_sampling_settles_all_but_cells_near_the_singular_locus():
     rho = PAPER_GRID.joints()
-    coeffs = rpr3._equation7_coefficients(rho[:, 0], rho[:, 1], rho[:, 2], PAPER_GEOMETRY)
+    coeffs = three_leg_solver._equation7_coefficients(rho[:, 0], rho[:, 1], rho[:, 2],
+                                                      PAPER_GEOMETRY)
     certified, _ = sampled_roots(coeffs, 64, MAX_SOLUTIONS)
     assert np.count_nonzero(~certified) < 0.01 * certified.size
 

@@ -14,13 +14,14 @@ from matplotlib.patches import Circle, Polygon
 
 from rpr3_gwr_core import PAPER_GEOMETRY, Grid, Planner, build_roadmap
 from rpr3_gwr_core.exceptions import GWRError, InvalidInputError
-from rpr3_gwr_core.io.figures import field_figure, plan_figure, roadmap_figure, slice_figure
+from rpr3_gwr_core.figures import field_figure, plan_figure, roadmap_figure, slice_figure
 from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
 from rpr3_gwr_core.mechanisms import DEFAULT_FIVE_BAR
 from rpr3_gwr_core.workspace.adaptive import coarse_base, refine
 from rpr3_gwr_core.workspace.cusps import find_cusps
 from rpr3_gwr_core.workspace.grid import Axis
-from rpr3_gwr_core.world import EMPTY_SCENE, load_scene
+from rpr3_gwr_core.io.scene_file import load_scene
+from rpr3_gwr_core.world import EMPTY_SCENE
 
 D = math.radians
 Q1, Q2 = (17, 12, 18, D(122.82)), (17, 10, 25, D(-24.24))
@@ -399,10 +400,12 @@ def test_a_plan_on_a_refined_3d_roadmap_draws_joints_and_pose_track(adaptive_roa
                             tmp_path)
 
 
-def test_a_plan_on_the_full_roadmap_draws_both_paths_and_rho1_moving(full_roadmap, tmp_path):
+@pytest.mark.slow
+def test_a_plan_on_the_full_roadmap_draws_both_paths_and_rho1_moving(full_roadmap, full_planner,
+                                                                   tmp_path):
     # The pocket (test_full_roadmap): the same legs, both modes, rho1 must move.
     legs, alphas = (27.5, 31.67154934, 2.14117832), (-1.7627825445142729, 2.7584625675676517)
-    plan = planned(full_roadmap, (*legs, alphas[0]), (*legs, alphas[1]))
+    plan = full_planner.plan((*legs, alphas[0]), (*legs, alphas[1])).to_dict()
     figure = plan_figure(full_roadmap, plan)
     check_space_plan_figure(figure, full_roadmap, plan, tmp_path)
     rho1 = figure.axes[2].get_lines()[0].get_ydata()

@@ -42,11 +42,6 @@ def torus_configurations(count, seed, min_margin=3e-3):
     return rows, pose[keep][:count], np.sign(margin[keep])[:count]
 
 
-@pytest.fixture(scope="module")
-def planner(full_roadmap):
-    return Planner(full_roadmap)
-
-
 def test_the_full_roadmap_is_adaptive_over_the_three_legs(full_roadmap):
     grid = full_roadmap.grid
     assert isinstance(grid, AdaptiveGrid) and grid.base == FULL_BASE_GRID
@@ -63,7 +58,7 @@ def test_every_stored_solution_has_its_cells_legs(full_roadmap):
     assert np.abs(residual).max() <= 1e-6 * PAPER_GEOMETRY.scale**2
 
 
-def test_the_configuration_space_has_two_aspect_connected_components(full_roadmap, planner):
+def test_the_configuration_space_has_two_aspect_connected_components(full_roadmap, full_planner):
     seg = full_roadmap.segmentation
     groups = aspect_groups(full_roadmap.graph)
     assert len(groups) == 2
@@ -71,7 +66,7 @@ def test_the_configuration_space_has_two_aspect_connected_components(full_roadma
     assert all(len({seg.patches[p].aspect for p in group}) == 1 for group in groups)
     rows, _, signs = torus_configurations(60, seed=3)
     for row, sign in zip(rows, signs):
-        location = planner.locate(row)
+        location = full_planner.locate(row)
         assert seg.patches[location.patch].aspect == sign
 
 
@@ -95,21 +90,21 @@ def test_the_rho1_17_slice_of_the_3d_field_has_the_papers_seven_regions(full_roa
     assert counts == sorted([2, 4, 4, 2, 6, 4, 2])  # the paper's regions 1..7
 
 
-def test_the_pocket_needs_rho1_to_move(full_roadmap, planner):
+def test_the_pocket_needs_rho1_to_move(full_roadmap, full_planner):
     start, goal = (*POCKET_LEGS, POCKET_ALPHAS[0]), (*POCKET_LEGS, POCKET_ALPHAS[1])
     with pytest.raises(InfeasiblePathError) as refused:
         Planner(build_roadmap(PAPER_GEOMETRY, rho1_slice(POCKET_LEGS[0]))).plan(start, goal)
     assert refused.value.reason == "unreachable"
-    plan = planner.plan(start, goal)
+    plan = full_planner.plan(start, goal)
     assert plan.validation.ok and plan.validation.aspect == -1
     assert np.ptp(plan.joints[:, 0]) > 1.0
     check = validate_path(PAPER_GEOMETRY, plan.joints, plan.poses[0], plan.poses[-1])
     assert check.ok
 
 
-def test_the_chosen_global_path_is_the_patches_the_smoothed_pocket_path_crosses(planner):
+def test_the_chosen_global_path_is_the_patches_the_smoothed_pocket_path_crosses(full_planner):
     start, goal = (*POCKET_LEGS, POCKET_ALPHAS[0]), (*POCKET_LEGS, POCKET_ALPHAS[1])
-    plan = planner.plan(start, goal, PlanOptions(smooth=True))
+    plan = full_planner.plan(start, goal, PlanOptions(smooth=True))
     assert plan.smoothed
     crossed = [int(p) for k, p in enumerate(plan.patches) if k == 0 or p != plan.patches[k - 1]]
     chosen = list(plan.global_paths[plan.path_index].patches)
@@ -118,13 +113,13 @@ def test_the_chosen_global_path_is_the_patches_the_smoothed_pocket_path_crosses(
     assert all(len(p.patches) <= 4 for p in plan.global_paths)
 
 
-def test_configurations_of_one_aspect_plan_with_all_legs_moving(planner):
+def test_configurations_of_one_aspect_plan_with_all_legs_moving(full_planner):
     rows, poses, signs = torus_configurations(40, seed=7)
     planned = 0
     for k in range(0, len(rows) - 1, 2):
         if signs[k] != signs[k + 1] or abs(rows[k][0] - rows[k + 1][0]) < 5.0:
             continue
-        plan = planner.plan(rows[k], rows[k + 1])
+        plan = full_planner.plan(rows[k], rows[k + 1])
         assert plan.validation.ok
         # The path starts and ends on the torus' own poses, all legs moving.
         assert np.allclose(plan.poses[0], poses[k], atol=1e-8)

@@ -7,8 +7,9 @@ import pytest
 from hypothesis import assume, given, settings, strategies as st
 
 from gwr_cases import PAPER_EXAMPLES
-from rpr3_gwr_core.mechanisms.rpr3 import (MAX_SOLUTIONS, PAPER_GEOMETRY, ThreeRPR,
-                                           beta_from_sides, serial_jacobian)
+from rpr3_gwr_core.mechanisms.rpr3 import (PAPER_GEOMETRY, ThreeRPR, beta_from_sides,
+                                           serial_jacobian)
+from rpr3_gwr_core.mechanisms.three_leg_solver import MAX_SOLUTIONS
 
 TOL_DEG = 0.05
 

@@ -4,17 +4,22 @@ the grids it gives, and the command line on it."""
 import json
 import math
 import pathlib
+import re
 
 import numpy as np
 import pytest
 from scipy.optimize import brentq
+import yaml
 
 from rpr3_gwr_core.exceptions import InvalidInputError
 from rpr3_gwr_core.io.cli import main
-from rpr3_gwr_core.io.mechanism_file import (HOME_SAMPLES, UNIFORM_CELLS, load_mechanism_file,
-                                              mechanism_file_from_dict, roadmap_grid)
+from rpr3_gwr_core.io.mechanism_file import (BYTES_PER_CELL, HOME_SAMPLES, UNIFORM_CELLS,
+                                              load_mechanism_file, mechanism_file_from_dict,
+                                              roadmap_grid)
 from rpr3_gwr_core.mechanisms import DEFAULT_FIVE_BAR, DEFAULT_THREE_RRR
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID
+from rpr3_gwr_core.workspace.adaptive import AdaptiveGrid
+from rpr3_gwr_core.workspace.grid import MAX_GRID_CELLS
 
 CONFIG = pathlib.Path(__file__).resolve().parents[3] / "config"
 FIVE_BAR = str(CONFIG / "five_bar.yaml")
@@ -47,15 +52,68 @@ def test_the_three_rrr_file_is_the_default_three_rrr_on_its_torus():
     assert slice_.fixed == ((0, 0.0),) and slice_.shape == (120, 120)
 
 
-def test_a_large_box_of_all_the_joints_builds_adaptively():
-    torus = load_mechanism_file(THREE_RRR).grid()
-    assert torus.size > UNIFORM_CELLS
-    base, refinement = roadmap_grid(torus)
-    assert refinement == 4 and base.shape == (30, 30, 30)
-    assert [a.periodic for a in base.axes] == [True, True, True]
-    for grid in (load_mechanism_file(FIVE_BAR).grid(), load_mechanism_file(THREE_RRR).grid(
-            {"th1": 0.0})):
-        assert roadmap_grid(grid) == (grid, None)
+def test_a_large_box_of_all_the_joints_builds_adaptively_on_the_files_lattice():
+    described = load_mechanism_file(THREE_RRR)
+    assert math.prod(a.count for a in described.axes) > UNIFORM_CELLS
+    grid = roadmap_grid(described)
+    assert isinstance(grid, AdaptiveGrid) and grid.refinement == 4
+    assert grid.base.shape == (30, 30, 30)
+    assert [a.count for a in grid.axes] == [a.count for a in described.axes]
+    assert np.allclose(grid.steps, [a.step for a in described.axes], rtol=1e-12)
+    assert grid.size < math.prod(a.count for a in described.axes)
+    five_bar = load_mechanism_file(FIVE_BAR)
+    assert roadmap_grid(five_bar) == five_bar.grid()
+    assert roadmap_grid(described, {"th1": 0.0}) == described.grid({"th1": 0.0})
+
+
+# A user's 3-RPR whose lattice (legs 5 to 30 by 0.125: 201 ** 3 points) is
+# twice the limit of a uniform grid.
+USER_RPR = {"mechanism": {"kind": "3-RPR", "a1": [0.0, 0.0], "a2": [20.0, 0.0],
+                          "a3": [5.0, 15.0], "d1": 10.0, "d3": 12.0, "beta_deg": 60},
+            "joints": [{"name": f"rho{k}", "min": 5.0, "max": 30.0, "step": 0.125}
+                       for k in (1, 2, 3)]}
+
+
+def test_the_full_box_of_a_lattice_beyond_a_grids_limit_fits_adaptively():
+    described = mechanism_file_from_dict(USER_RPR)
+    assert math.prod(a.count for a in described.axes) > MAX_GRID_CELLS
+    grid = roadmap_grid(described, memory=8 * 2 ** 30)
+    assert np.allclose(grid.steps, 0.125, rtol=1e-12) and grid.size <= MAX_GRID_CELLS
+    assert grid.size * BYTES_PER_CELL <= 8 * 2 ** 30
+
+
+def _steps_named(message):
+    return {name: float(value) for name, value in re.findall(r"(rho\d) step ([\d.]+)", message)}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("document, memory", [
+    (USER_RPR, 2 ** 30),
+    # The paper's file: a fine lattice of 401 ** 3 points, beyond the refinement's.
+    (yaml.safe_load(pathlib.Path(PAPER).read_text()), 16 * 2 ** 30),
+])
+def test_a_box_that_does_not_fit_is_refused_with_steps_that_fit(document, memory):
+    with pytest.raises(InvalidInputError, match="more than a build may take") as refused:
+        roadmap_grid(mechanism_file_from_dict(document), memory=memory)
+    steps = _steps_named(str(refused.value))
+    assert sorted(steps) == ["rho1", "rho2", "rho3"]
+    coarser = dict(document, joints=[dict(joint, step=steps[joint["name"]])
+                                     for joint in document["joints"]])
+    grid = roadmap_grid(mechanism_file_from_dict(coarser), memory=memory)
+    assert grid.size * BYTES_PER_CELL <= memory
+
+
+def test_a_slice_that_does_not_fit_is_refused_with_steps_that_fit():
+    document = dict(USER_RPR, joints=[dict(j, step=0.001) for j in USER_RPR["joints"]])
+    described = mechanism_file_from_dict(document)
+    with pytest.raises(InvalidInputError, match="slice would have 625,") as refused:
+        roadmap_grid(described, {"rho1": 15.0})
+    steps = _steps_named(str(refused.value))
+    assert sorted(steps) == ["rho2", "rho3"]
+    coarser = dict(document, joints=[dict(joint, step=steps.get(joint["name"], 0.001))
+                                     for joint in document["joints"]])
+    assert roadmap_grid(mechanism_file_from_dict(coarser), {"rho1": 15.0}).size \
+        <= MAX_GRID_CELLS
 
 
 def _document(**changes):
@@ -157,6 +215,14 @@ def test_a_file_may_put_the_legs_in_one_layer():
     described = mechanism_file_from_dict(_document(bodies={"leg_layers": [1, 1]}))
     assert described.bodies.leg_layers == (1, 1)
     assert mechanism_file_from_dict(_document()).bodies is None
+
+
+@pytest.mark.parametrize("layers", [[], [1], [1, 1, 1]])
+def test_leg_layers_other_than_one_per_leg_are_refused_where_the_file_is_read(layers):
+    # The five-bar has two legs.
+    with pytest.raises(InvalidInputError, match=f"'bodies': leg_layers must give 2 layers, "
+                                                f"got {len(layers)}"):
+        mechanism_file_from_dict(_document(bodies={"leg_layers": layers}))
 
 
 # A user's 3-RRR (base side 30, platform side 8, links 10 and 10): its box

@@ -1,6 +1,7 @@
 """The compiled kernels that the 3-RRR and the 3-PRR share
-(``rrr3._MovingBaseRPR``), against the 3-RPR's row arithmetic on base points
-computed here, and the tables of the sampled root finder (:mod:`.trig_roots`)."""
+(:class:`~rpr3_gwr_core.mechanisms.moving_base.MovingBaseRPR`), against the
+three-leg solver's row arithmetic on base points computed here, and the
+tables of the sampled root finder (:mod:`.trig_roots`)."""
 
 import math
 
@@ -8,7 +9,7 @@ import numpy as np
 import pytest
 
 from rpr3_gwr_core.mechanisms import DEFAULT_THREE_PRR, DEFAULT_THREE_RRR, ThreePRR, ThreeRRR
-from rpr3_gwr_core.mechanisms.rpr3 import _leg_residuals, _rows_margin, _row_terms
+from rpr3_gwr_core.mechanisms.three_leg_solver import leg_residuals, row_terms, rows_margin
 from rpr3_gwr_core.mechanisms.trig_roots import _MAX_DEPTH, _sampling, sampled_roots
 
 MECHANISMS = [DEFAULT_THREE_RRR, DEFAULT_THREE_PRR,
@@ -29,7 +30,7 @@ def moving_points(m, joints):
 def rows_of(m, poses, joints):
     """The rows of ``Jx / 2`` (the 3-RPR's) of poses at joints (n, 3)."""
     c = moving_points(m, joints).reshape(-1, 6).T
-    return _row_terms(poses[:, 0], poses[:, 1], poses[:, 2], (*c, m.d1, m.d3, m.beta))
+    return row_terms(poses[:, 0], poses[:, 1], poses[:, 2], (*c, m.d1, m.d3, m.beta))
 
 
 def sample(m, n, seed):
@@ -60,9 +61,9 @@ def test_kernels_are_the_rpr_rows_on_the_moving_base_points(m):
     assert np.allclose(m.base_points(joints), moving_points(m, joints), rtol=0, atol=1e-12)
     rows = rows_of(m, poses, joints)
     legs = (m.distal, m.distal, m.distal)
-    assert np.allclose(m.residual(poses, joints), np.stack(_leg_residuals(rows, legs), -1),
+    assert np.allclose(m.residual(poses, joints), np.stack(leg_residuals(rows, legs), -1),
                        rtol=0, atol=1e-9)
-    expected = [_rows_margin(tuple(float(v[k]) for v in rows), m.scale)
+    expected = [rows_margin(tuple(float(v[k]) for v in rows), m.scale)
                 for k in range(len(poses))]
     assert np.allclose(m.margin(poses, joints), expected, rtol=0, atol=1e-12)
     # Newton from a solution's neighbourhood lands on the solution.

@@ -1,8 +1,9 @@
 """The compiled paths of the slice builds against the numpy arithmetic they
 replace, bit for bit: the difference and distance of poses and the separation of a
 cell's solutions (:class:`~rpr3_gwr_core.mechanisms.base.Mechanism`), the
-field's separation taken chunk by chunk, and the 3-RPR solver's per-root
-work for base points per row (:func:`~rpr3_gwr_core.mechanisms.rpr3.solve_with_bases`)."""
+field's separation taken chunk by chunk, and the three-leg solver's per-root
+work for base points per row
+(:func:`~rpr3_gwr_core.mechanisms.three_leg_solver.solve_with_bases`)."""
 
 import math
 
@@ -11,9 +12,9 @@ import pytest
 
 from rpr3_gwr_core import PAPER_GEOMETRY, Axis, Grid, compute_field
 from rpr3_gwr_core.mechanisms import DEFAULT_FIVE_BAR, DEFAULT_THREE_PRR, DEFAULT_THREE_RRR
-from rpr3_gwr_core.mechanisms.rpr3 import (
+from rpr3_gwr_core.mechanisms.three_leg_solver import (
     _FAKE_RESIDUAL, _BasePerRow, _linear_poses, _moving_base_fake, _moving_base_linear,
-    _residuals)
+    residuals)
 from rpr3_gwr_core.workspace.field import NSolutionField
 
 
@@ -136,5 +137,5 @@ def test_per_root_kernels_are_the_numpy_formula(m):
     fake = _moving_base_fake(points, rho, rows, poses, (platform.d1, platform.d3, platform.beta),
                              limit)
     with np.errstate(invalid="ignore"):
-        misfit = np.max(np.abs(_residuals(poses, r, geometry)), axis=-1)
+        misfit = np.max(np.abs(residuals(poses, r, geometry)), axis=-1)
     assert np.array_equal(fake, misfit > limit)

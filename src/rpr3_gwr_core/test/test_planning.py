@@ -136,13 +136,13 @@ def test_local_paths_cost_what_dijkstra_finds(planner, paper_roadmap, clearance)
     checked = 0
     for _ in range(12):
         start_patch, goal_patch = rng.choice(sorted(seg.patches), 2)
-        answer = feasibility(planner.global_index, start_patch, goal_patch)
+        answer = feasibility(planner.patch_graph, start_patch, goal_patch)
         if not answer.feasible:
             continue
-        path = global_paths(planner.global_index, start_patch, goal_patch)[0].patches
+        path = global_paths(planner.patch_graph, start_patch, goal_patch)[0].patches
         start_cell = int(rng.choice(seg.patches[path[0]].cells))
         goal_cell = int(rng.choice(seg.patches[path[-1]].cells))
-        local = planner.local.plan(path, start_cell, goal_cell, clearance=clearance)
+        local = planner.cell_search.search(path, start_cell, goal_cell, clearance=clearance)
         reference = _layered_reference_cost(paper_roadmap, path, start_cell, goal_cell,
                                             clearance)
         assert local.cost == pytest.approx(reference, rel=1e-9), path
@@ -159,12 +159,12 @@ def test_an_inflated_estimate_costs_at_most_its_factor_more(planner, paper_roadm
     checked = 0
     for _ in range(12):
         start_patch, goal_patch = rng.choice(sorted(seg.patches), 2)
-        if not feasibility(planner.global_index, start_patch, goal_patch).feasible:
+        if not feasibility(planner.patch_graph, start_patch, goal_patch).feasible:
             continue
-        path = global_paths(planner.global_index, start_patch, goal_patch)[0].patches
+        path = global_paths(planner.patch_graph, start_patch, goal_patch)[0].patches
         start_cell = int(rng.choice(seg.patches[path[0]].cells))
         goal_cell = int(rng.choice(seg.patches[path[-1]].cells))
-        local = planner.local.plan(path, start_cell, goal_cell, clearance=0.02,
+        local = planner.cell_search.search(path, start_cell, goal_cell, clearance=0.02,
                                    inflation=inflation)
         least = _layered_reference_cost(paper_roadmap, path, start_cell, goal_cell, 0.02)
         assert least * (1 - 1e-9) <= local.cost <= inflation * least * (1 + 1e-9), path
@@ -179,7 +179,7 @@ def test_an_inflation_that_is_not_a_whole_factor_is_refused(planner, paper_roadm
     pid = min(paper_roadmap.segmentation.patches)
     cells = paper_roadmap.segmentation.patches[pid].cells
     with pytest.raises(InvalidInputError, match="inflation"):
-        planner.local.plan((pid,), int(cells[0]), int(cells[-1]), inflation=inflation)
+        planner.cell_search.search((pid,), int(cells[0]), int(cells[-1]), inflation=inflation)
 
 
 class _InterpretedThreeRPR(ThreeRPR):
@@ -224,9 +224,9 @@ def test_smoothing_shortens_the_path_and_keeps_the_margin(planner):
 def test_between_aspects_is_infeasible_from_the_roadmap_alone(planner):
     start = planner.locate(Q1)
     goal = planner.locate(MODE_A)
-    answer = feasibility(planner.global_index, start.patch, goal.patch)
+    answer = feasibility(planner.patch_graph, start.patch, goal.patch)
     assert not answer.feasible and answer.reason == "other_aspect"
-    assert global_paths(planner.global_index, start.patch, goal.patch) == []
+    assert global_paths(planner.patch_graph, start.patch, goal.patch) == []
     with pytest.raises(InfeasiblePathError) as info:
         planner.plan(Q1, MODE_A)
     assert info.value.reason == "other_aspect"
@@ -258,6 +258,23 @@ def test_time_parameterisation_respects_the_limits(planner):
     segment_speed = np.abs(np.diff(plan.joints, axis=0)) / np.diff(plan.times)[:, None]
     assert np.max(segment_speed) <= 2.0 + 1e-9
     np.testing.assert_array_equal(plan.velocities[[0, -1]], 0.0)
+
+
+def test_per_joint_limits_hold_each_for_its_joint(planner):
+    velocity, acceleration = (2.0, 0.5, 1.0), (4.0, 1.0, 0.25)
+    plan = planner.plan(Q1, Q2, PlanOptions(smooth=True, max_velocity=velocity,
+                                            max_acceleration=acceleration))
+    interval = np.diff(plan.times)[:, None]
+    assert np.all(np.abs(np.diff(plan.joints, axis=0)) / interval <= np.array(velocity) + 1e-9)
+    assert np.all(np.abs(plan.velocities) <= np.array(velocity) + 1e-9)
+    assert np.all(np.abs(plan.accelerations) <= np.array(acceleration) + 1e-9)
+
+
+@pytest.mark.parametrize("limits", [dict(max_velocity=(1.0, 1.0), max_acceleration=1.0),
+                                    dict(max_velocity=1.0, max_acceleration=(1.0,) * 4)])
+def test_per_joint_limits_not_one_per_joint_are_refused(planner, limits):
+    with pytest.raises(InvalidInputError, match="limits for the 3 joints"):
+        planner.plan(Q1, Q2, PlanOptions(**limits))
 
 
 @pytest.mark.parametrize("configuration, error", [
@@ -311,6 +328,9 @@ def test_invalid_options_are_refused():
         PlanOptions(max_velocity=1.0)
     with pytest.raises(InvalidInputError):
         PlanOptions(max_velocity=-1.0, max_acceleration=1.0)
+    for bad in ((1.0, float("nan"), 1.0), (), (1.0, "fast"), True):
+        with pytest.raises(InvalidInputError, match="one per joint"):
+            PlanOptions(max_velocity=bad, max_acceleration=1.0)
 
 
 def _random_configuration(roadmap, draw):
@@ -416,7 +436,7 @@ def test_planner_works_on_another_rho1():
     planner = Planner(roadmap)
     seg = roadmap.segmentation
     big = max(seg.patches.values(), key=lambda p: p.cells.size)
-    deep = np.flatnonzero(planner.local.clearance(big.id) >= 4)
+    deep = np.flatnonzero(planner.cell_search.clearance(big.id) >= 4)
     ends = [(big.cells[k], big.slots[k]) for k in (deep[0], deep[-1])]
     a, b = ((*roadmap.grid.joints_of(c), float(seg.field.poses[c, s, 2])) for c, s in ends)
     plan = planner.plan(a, b)
@@ -424,10 +444,11 @@ def test_planner_works_on_another_rho1():
 
 
 def test_a_polyline_keeps_its_ends_and_turns():
-    from rpr3_gwr_core.planning.planner import _turns
+    from rpr3_gwr_core.planning.simplifier import polyline_turns
+
     points = np.array([[0, 0], [1, 0], [2, 0], [2, 1], [2, 2], [3, 3], [4, 4], [4, 4.5]],
                       dtype=float)
-    assert _turns(points).tolist() == [0, 2, 4, 6, 7]
+    assert polyline_turns(points).tolist() == [0, 2, 4, 6, 7]
 
 
 def test_gate_distances_outside_the_index_are_kept_for_the_last_clearances_first_used(
@@ -435,8 +456,8 @@ def test_gate_distances_outside_the_index_are_kept_for_the_last_clearances_first
     planner = Planner(paper_roadmap)
     for clearance in (0.0, 0.01, 0.02, 0.03, 0.04, 0.05, 0.01):
         planner.plan(Q1, Q2, PlanOptions(clearance=clearance))
-    assert planner.planning_index.clearances == (DEFAULT_CLEARANCE,)
-    assert list(planner.local._extra_fields) == [0.01, 0.03, 0.04, 0.05]
+    assert planner.search_index.clearances == (DEFAULT_CLEARANCE,)
+    assert list(planner.cell_search._extra_fields) == [0.01, 0.03, 0.04, 0.05]
 
 
 # --- what a worker process needs (the planner node starts them) ----------------------------------

@@ -14,9 +14,9 @@ from rpr3_gwr_core import PAPER_GEOMETRY
 from rpr3_gwr_core.exceptions import InvalidInputError
 from rpr3_gwr_core.io.cache import cached_planning
 from rpr3_gwr_core.paper import rho1_slice
-from rpr3_gwr_core.planning import DEFAULT_CLEARANCE, PlanningIndex, PlanOptions, Planner
+from rpr3_gwr_core.planning import DEFAULT_CLEARANCE, CellSearchIndex, PlanOptions, Planner
+from rpr3_gwr_core.planning.cell_search import CellSearch
 from rpr3_gwr_core.planning.index import COST_UNITS
-from rpr3_gwr_core.planning.local_planning import LocalPlanner
 
 D = math.radians
 GRID = rho1_slice(rho1=17, step=0.25)
@@ -51,7 +51,7 @@ def test_a_loaded_index_equals_the_built_one(cached):
 def test_an_index_without_gate_distances_plans_the_same(cached):
     """Computed on first use, patch by patch, the distances give the same plans."""
     _, roadmap, index = cached
-    bare = Planner(roadmap, PlanningIndex.build(roadmap))
+    bare = Planner(roadmap, CellSearchIndex.build(roadmap))
     full = Planner(roadmap, index)
     for start, goal in PAIRS:
         for options in (PlanOptions(), PlanOptions(smooth=True, clearance=0.05)):
@@ -65,14 +65,14 @@ def test_an_index_is_refused_for_another_roadmap(cached):
 
     other = build_roadmap(PAPER_GEOMETRY, rho1_slice(rho1=14, step=0.25))
     with pytest.raises(InvalidInputError):
-        PlanningIndex.from_arrays(other, index.arrays())
+        CellSearchIndex.from_arrays(other, index.arrays())
 
 
 @pytest.mark.parametrize("values", [(-0.1,), (1.0,), (math.nan,)])
 def test_clearances_out_of_range_are_refused(cached, values):
     _, roadmap, _ = cached
     with pytest.raises(InvalidInputError):
-        PlanningIndex.build(roadmap, clearances=values)
+        CellSearchIndex.build(roadmap, clearances=values)
 
 
 _FRESH_PROCESS = textwrap.dedent("""
@@ -90,7 +90,7 @@ _FRESH_PROCESS = textwrap.dedent("""
     planner = Planner(roadmap, index)
     plans = [planner.plan(*pair).joints.tolist() for pair in json.loads(sys.argv[2])]
     print(json.dumps({"hit": hit, "mapped": mapped, "plans": plans,
-                      "computed": list(planner.local._extra_fields)}))
+                      "computed": list(planner.cell_search._extra_fields)}))
 """)
 
 
@@ -111,18 +111,18 @@ def test_a_fresh_process_plans_from_the_mapped_index(cached):
 
 def test_an_index_on_the_graph_of_another_equals_one_built_whole(cached):
     _, roadmap, index = cached
-    bare = PlanningIndex.build(roadmap)
-    again = PlanningIndex.build(roadmap, index.clearances, index.weights, graph_from=bare)
+    bare = CellSearchIndex.build(roadmap)
+    again = CellSearchIndex.build(roadmap, index.clearances, index.weights, graph_from=bare)
     for name, array in index.arrays().items():
         np.testing.assert_array_equal(again.arrays()[name], array, err_msg=name)
 
 
 def test_an_index_holding_what_is_asked_is_taken_as_it_is(cached):
     _, roadmap, index = cached
-    assert PlanningIndex.build(roadmap, index.clearances, index.weights,
+    assert CellSearchIndex.build(roadmap, index.clearances, index.weights,
                                graph_from=index) is index
-    assert PlanningIndex.build(roadmap, (), (), graph_from=index) is index
-    other = PlanningIndex.build(roadmap, (0.05,), index.weights, graph_from=index)
+    assert CellSearchIndex.build(roadmap, (), (), graph_from=index) is index
+    other = CellSearchIndex.build(roadmap, (0.05,), index.weights, graph_from=index)
     assert other is not index and other.clearances == (0.05,)
 
 
@@ -144,7 +144,7 @@ def test_the_cost_floors_are_each_patch_s_smallest_node_cost(cached):
     _, roadmap, index = cached
     weight = index.weights[0]
     costs, floors = index.costs(weight)
-    on_first_use = LocalPlanner(roadmap, PlanningIndex.build(roadmap))
+    on_first_use = CellSearch(roadmap, CellSearchIndex.build(roadmap))
     for k in range(index.pids.size):
         smallest = costs[index.offsets[k]:index.offsets[k + 1]].min()
         assert floors[k] == smallest >= COST_UNITS

@@ -1,12 +1,13 @@
 """Planning and world objects print a one-line summary, not their arrays."""
 
+import dataclasses
 import pathlib
 
 import numpy as np
 import pytest
 
-from rpr3_gwr_core.planning.planner import Planner, PlanOptions
-from rpr3_gwr_core.world import load_scene
+from rpr3_gwr_core.planning.planner import Planner, PlanOptions, PlanStatus
+from rpr3_gwr_core.io.scene_file import load_scene
 
 from test_planning import Q1, Q2
 
@@ -36,12 +37,12 @@ def test_plan_and_its_parts_summarise(planner):
     assert _short(repr(planner)).startswith("Planner(")
 
 
-def test_infeasible_plan_says_why(planner):
+def test_an_approximate_plan_says_what_the_deadline_skipped(planner):
     plan = planner.plan(Q1, Q2, PlanOptions(feasibility_only=True))
-    assert plan.feasible and "waypoints" in repr(plan)
-    blank = type(plan)(feasible=False, reason="other_aspect", start=plan.start,
-                       goal=plan.goal, global_paths=[])
-    assert repr(blank) == "Plan(infeasible: other_aspect)"
+    assert plan.status is PlanStatus.EXACT_SOLUTION and "approximate" not in repr(plan)
+    cut = dataclasses.replace(plan, status=PlanStatus.APPROXIMATE_SOLUTION,
+                              skipped=("rounding",))
+    assert _short(repr(cut)).endswith("approximate: the deadline skipped rounding)")
 
 
 def test_scene_and_scene_roadmap_summarise(planner):

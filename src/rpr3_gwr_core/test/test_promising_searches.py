@@ -13,7 +13,7 @@ from scipy.sparse.csgraph import dijkstra
 from rpr3_gwr_core import PAPER_GEOMETRY
 from rpr3_gwr_core.exceptions import InvalidInputError, PlanningTimeoutError
 from rpr3_gwr_core.paper import rho1_slice
-from rpr3_gwr_core.planning import Planner, planner as planner_module
+from rpr3_gwr_core.planning import Planner, repair as repair_module
 from rpr3_gwr_core.planning.index import LOW_MARGIN_FACTOR
 from rpr3_gwr_core.planning.planner import PlanOptions, Retries
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
@@ -37,7 +37,7 @@ def _graph_distances(planner, source, clearance):
     """Least costs from a node over the whole node graph, by scipy: an edge
     costs its length times the sum of its ends' costs (1, or
     LOW_MARGIN_FACTOR below the clearance), as the searches count."""
-    index = planner.planning_index
+    index = planner.search_index
     graph = index.graph
     cost = np.where(index.node_margin < clearance, LOW_MARGIN_FACTOR, 1)
     tails = np.repeat(np.arange(index.n_nodes), np.diff(graph.indptr))
@@ -51,36 +51,38 @@ def _graph_distances(planner, source, clearance):
 @pytest.mark.parametrize("pair", range(len(PAIRS)))
 def test_the_search_across_any_gates_finds_the_least_cost_path(planner, pair, clearance):
     s, g = (planner.locate(c) for c in PAIRS[pair])
-    path = planner.local.plan((s.patch, g.patch), s.cell, g.cell, clearance=clearance,
-                              any_gates=True)
-    index = planner.planning_index
-    source = planner.local._node(int(np.searchsorted(index.pids, s.patch)), s.cell, "start")
-    target = planner.local._node(int(np.searchsorted(index.pids, g.patch)), g.cell, "goal")
+    path = planner.cell_search.search((s.patch, g.patch), s.cell, g.cell, clearance=clearance,
+                                         any_gates=True)
+    index = planner.search_index
+    source = planner.cell_search._node(int(np.searchsorted(index.pids, s.patch)), s.cell, "start")
+    target = planner.cell_search._node(int(np.searchsorted(index.pids, g.patch)), g.cell, "goal")
     expected = _graph_distances(planner, source, clearance)[target] * index.quantum / 2
     assert path.cost == pytest.approx(expected, rel=1e-12)
     assert path.cells[0] == s.cell and path.cells[-1] == g.cell
     # No sequence of patches does better.
     for global_path in planner.plan(*PAIRS[pair]).global_paths:
-        layered = planner.local.plan(global_path.patches, s.cell, g.cell, clearance=clearance)
+        layered = planner.cell_search.search(global_path.patches, s.cell, g.cell,
+                                             clearance=clearance)
         assert path.cost <= layered.cost + 1e-9
 
 
 @pytest.mark.parametrize("pair", range(len(PAIRS)))
 def test_the_cheapest_patches_are_a_chain_of_gates_from_start_to_goal(planner, pair):
     s, g = (planner.locate(c) for c in PAIRS[pair])
-    chain = planner.local.cheapest_patches(s.patch, s.cell, g.patch, g.cell, 0.02)
+    chain = planner.cell_search.cheapest_patches(s.patch, s.cell, g.patch, g.cell, 0.02)
     gates = planner.roadmap.segmentation.gates
     assert chain[0] == s.patch and chain[-1] == g.patch
     assert len(set(chain)) == len(chain)
     assert all((min(a, b), max(a, b)) in gates for a, b in zip(chain, chain[1:]))
     # A local search through them exists.
-    planner.local.plan(chain, s.cell, g.cell, clearance=0.02)
+    planner.cell_search.search(chain, s.cell, g.cell, clearance=0.02)
 
 
 def test_a_search_stops_at_its_budget_of_nodes(planner):
     s, g = (planner.locate(c) for c in PAIRS[0])
     with pytest.raises(PlanningTimeoutError, match="budget of 50 nodes"):
-        planner.local.plan((s.patch, g.patch), s.cell, g.cell, any_gates=True, most_settled=50)
+        planner.cell_search.search((s.patch, g.patch), s.cell, g.cell, any_gates=True,
+                                   most_settled=50)
 
 
 @pytest.mark.parametrize("value", [-1, 1.5, True])
@@ -94,11 +96,6 @@ def test_a_budget_must_be_a_whole_number(value):
 # benchmark's pose lattice found, re-checked by continuation, is 17.19.
 FAR_ROUND = ((41.075377, 49.683449, 48.140368, 0.969858),
              (38.945574, 48.891499, 49.587255, 0.673552))
-
-
-@pytest.fixture(scope="module")
-def full_planner(full_roadmap):
-    return Planner(full_roadmap)
 
 
 def test_on_all_the_joints_the_plan_goes_the_short_way(full_planner):
@@ -116,7 +113,7 @@ def test_on_all_the_joints_the_plan_goes_the_short_way(full_planner):
 
 def test_without_a_budget_the_plan_follows_the_global_paths(full_planner):
     start, goal = FAR_ROUND
-    plan = Planner(full_planner.roadmap, full_planner.planning_index,
+    plan = Planner(full_planner.roadmap, full_planner.search_index,
                    retries=Retries(promising_nodes=0)).plan(start, goal)
     assert plan.path_index == 0
 
@@ -172,34 +169,36 @@ def _cases(plan, shows):
     return found
 
 
+@pytest.mark.slow
 def test_paths_kept_after_failed_repairs_pass_the_independent_continuation(
         full_planner, monkeypatch):
     """Where every repair of a local path is refused (at a singular sliver
     thinner than a cell), the plan is one of the tried paths that keeps
     min_margin, and it passes the independent continuation."""
-    repaired = Planner._repaired_path
+    repaired = repair_module.PathRepairer.repair
     fell_back = []
 
-    def tracked(self, *args, **kwargs):
-        result, joints, patches, route = repaired(self, *args, **kwargs)
-        fell_back.append(result.ok and result.min_margin < self._kept_margin(
-            args[1], args[2], args[3]))
+    def tracked(self, problem, *args, **kwargs):
+        result, joints, patches, route = repaired(self, problem, *args, **kwargs)
+        fell_back.append(result.ok and result.min_margin < problem.kept_margin(
+            self.checker.min_margin))
         return result, joints, patches, route
 
     def plan(start, goal):
         fell_back.clear()
         return full_planner.plan(start, goal), list(fell_back)
 
-    monkeypatch.setattr(Planner, "_repaired_path", tracked)
+    monkeypatch.setattr(repair_module.PathRepairer, "repair", tracked)
     for result, _, goal_pose in _cases(plan, any):
         assert_executable(result, goal_pose, full_planner.min_margin)
 
 
+@pytest.mark.slow
 def test_repairs_search_whole_paths_when_no_stretch_gives_a_valid_path(full_planner,
                                                                        monkeypatch):
     """Stretches that keep the refused path as it was (as where no way round
     is near) leave the second round, whose repairs search whole paths."""
-    validated = Planner._validated_path
+    validated = repair_module.PathRepairer.along
     tried = []
 
     def tracked(self, *args, **kwargs):
@@ -212,8 +211,8 @@ def test_repairs_search_whole_paths_when_no_stretch_gives_a_valid_path(full_plan
         options = PlanOptions(max_velocity=LIMITS[0], max_acceleration=LIMITS[1])
         return full_planner.plan(start, goal, options), list(tried)
 
-    monkeypatch.setattr(Planner, "_validated_path", tracked)
-    monkeypatch.setattr(planner_module, "_rerouted",
+    monkeypatch.setattr(repair_module.PathRepairer, "along", tracked)
+    monkeypatch.setattr(repair_module, "rerouted_stretch",
                         lambda search, cells, patches, *rest: (cells, patches))
     whole_searched = _cases(plan, lambda trace: any(not reroute for reroute, _ in trace))
     for result, trace, goal_pose in whole_searched:

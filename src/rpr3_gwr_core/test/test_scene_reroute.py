@@ -34,7 +34,7 @@ import pytest
 
 from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY as G
 from rpr3_gwr_core.planning.planner import Planner
-from rpr3_gwr_core.world import scene_from_dict
+from rpr3_gwr_core.world import mechanism_bodies, scene_from_dict
 from test_world_reference import (det_jx, reference_blocked, reference_track,
                                   torus_platform)
 
@@ -51,7 +51,7 @@ BASE = np.array([G.a1, G.a2, G.a3], dtype=float)
 def leg_radius():
     """Half the legs' width in the bodies the mechanism gives (default model)."""
     start = G.direct_kinematics(list(START[:3]))
-    bodies = G.bodies(start[0], START[:3])
+    bodies = mechanism_bodies(G, start[0], START[:3])
     return float(max(r for r, name in zip(bodies.capsule_radius, bodies.names)
                      if name.startswith("leg")))
 
@@ -180,7 +180,7 @@ def test_every_rerouted_waypoint_keeps_legs_and_platform_off_the_post(rerouted):
     b = np.array([torus_platform(p) for p in poses])
     # The poses solve the joints, and the mechanism's bodies are these legs.
     assert np.allclose(np.linalg.norm(b - BASE, axis=-1), joints, atol=1e-6)
-    bodies = G.bodies(poses, joints)
+    bodies = mechanism_bodies(G, poses, joints)
     legs = [k for k, name in enumerate(bodies.names) if name.startswith("leg")]
     assert len(legs) == 3
     assert np.allclose(bodies.capsules[:, legs, 0], BASE, atol=1e-9)

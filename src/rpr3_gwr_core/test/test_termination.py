@@ -55,9 +55,9 @@ def test_the_local_search_stops_at_its_deadline(planner):
     """A search settling thousands of nodes looks at the clock on the way."""
     s, g = planner.locate(Q1), planner.locate(Q2)
     path = planner.plan(Q1, Q2, PlanOptions(feasibility_only=True)).global_paths[0]
-    planner.local.plan(path.patches, s.cell, g.cell)  # completes without a deadline
+    planner.cell_search.search(path.patches, s.cell, g.cell)  # completes without a deadline
     with pytest.raises(PlanningTimeoutError):
-        planner.local.plan(path.patches, s.cell, g.cell, termination=Termination(0.0))
+        planner.cell_search.search(path.patches, s.cell, g.cell, termination=Termination(0.0))
 
 
 def test_a_deadline_passing_before_smoothing_returns_the_valid_path_unsmoothed(planner):

@@ -51,6 +51,20 @@ steps = arrays(np.float64, st.tuples(st.integers(1, 30), st.just(3)),
 @settings(max_examples=300, deadline=None)
 @given(steps=steps, max_velocity=st.floats(1e-2, 1e3), max_acceleration=st.floats(1e-2, 1e4))
 def test_limits_hold_between_the_points_of_any_path(steps, max_velocity, max_acceleration):
+    _check_drawn_path(steps, max_velocity, max_acceleration)
+
+
+@settings(max_examples=200, deadline=None)
+@given(steps=steps,
+       max_velocity=arrays(np.float64, 3, elements=st.floats(1e-2, 1e3)),
+       max_acceleration=arrays(np.float64, 3, elements=st.floats(1e-2, 1e4)))
+def test_each_joint_keeps_its_own_limits(steps, max_velocity, max_acceleration):
+    _check_drawn_path(steps, max_velocity, max_acceleration)
+
+
+def _check_drawn_path(steps, max_velocity, max_acceleration):
+    """A drawn path is timed within its limits, or refused as too fast for
+    nanoseconds."""
     path = np.vstack([[17.0, 20.0, 20.0], 17.0 + np.cumsum(steps, axis=0)])
     try:
         timing = time_parameterize(path, max_velocity, max_acceleration)
@@ -58,3 +72,20 @@ def test_limits_hold_between_the_points_of_any_path(steps, max_velocity, max_acc
         assert "1 ns" in str(error)
         return
     assert_limits_hold(path, *timing, max_velocity, max_acceleration)
+
+
+def test_a_slower_joint_slows_the_move_and_the_others_keep_theirs():
+    path = np.array([[17.0, 18.875, 32.25], [17.0, 33.375, 42.125]])
+    uniform, *_ = time_parameterize(path, 1.0, 2.0)
+    slow_rho3, *_ = time_parameterize(path, [1.0, 1.0, 0.1], [2.0, 2.0, 2.0])
+    # rho3 moves 9.875 at most 0.1 a second.
+    assert slow_rho3[-1] >= 9.875 / 0.1 > uniform[-1]
+    np.testing.assert_array_equal(time_parameterize(path, [1.0] * 3, [2.0] * 3)[0], uniform)
+
+
+@pytest.mark.parametrize("limits", [[1.0, 1.0], [[1.0, 1.0, 1.0]], [1.0, -1.0, 1.0],
+                                    [1.0, float("nan"), 1.0], "fast"])
+def test_limits_of_the_wrong_count_or_value_are_refused(limits):
+    path = np.array([[17.0, 18.0, 32.0], [17.0, 19.0, 33.0]])
+    with pytest.raises(InvalidInputError, match="limit"):
+        time_parameterize(path, limits, 1.0)

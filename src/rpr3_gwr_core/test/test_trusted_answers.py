@@ -123,7 +123,7 @@ def test_limits_that_cannot_time_the_path_are_refused_or_give_a_sound_profile(pl
 def test_a_local_failure_tries_the_next_global_path(paper_roadmap):
     planner = Planner(paper_roadmap)
     first = planner.plan(Q1, Q2).global_paths[0].patches
-    plan_locally = planner.local.plan
+    plan_locally = planner.cell_search.search
 
     def cut_first(patches, *args, **kwargs):
         # As if a patch of the first global path were cut between its gates.
@@ -131,7 +131,7 @@ def test_a_local_failure_tries_the_next_global_path(paper_roadmap):
             raise InfeasiblePathError(f"no local path through patches {list(patches)}")
         return plan_locally(patches, *args, **kwargs)
 
-    planner.local.plan = cut_first
+    planner.cell_search.search = cut_first
     plan = planner.plan(Q1, Q2)
     assert plan.path_index > 0 and plan.validation.ok
 

@@ -19,7 +19,7 @@ from rpr3_gwr_core.paper import rho1_slice
 from rpr3_gwr_core.planning.planner import Planner
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
 from rpr3_gwr_core.world import (BodyModel, WorldIndex, configuration_collision,
-                                 path_collisions, scene_from_dict)
+                                 mechanism_bodies, path_collisions, scene_from_dict)
 
 RHO1 = 17.0
 N_THETA, N_ALPHA = 480, 480
@@ -190,7 +190,7 @@ def test_kernel_agrees_with_the_reference_on_the_torus(name, torus):
     scene = scene_from_dict(SCENES[name])
     expected = reference_blocked(b.reshape(-1, 3, 2)[picks], SCENES[name])
     from rpr3_gwr_core.world.collision import check_bodies, compile_scene
-    bodies = G.bodies(pose.reshape(-1, 3)[picks], rho.reshape(-1, 3)[picks])
+    bodies = mechanism_bodies(G, pose.reshape(-1, 3)[picks], rho.reshape(-1, 3)[picks])
     got = check_bodies(compile_scene(scene, G, bodies), bodies, rho.reshape(-1, 3)[picks])
     assert np.array_equal(got[:, 0] != 0, expected)
     if name != "free":
@@ -421,6 +421,7 @@ def test_limits_along_plans_agree_with_the_reference(name, planner, torus):
                                        track[:, 2], limits).any()
 
 
+@pytest.mark.slow
 def test_a_way_narrower_than_a_cell_is_found_on_a_finer_grid(planner, torus):
     """The torus joins the first example within this range of platform
     joint 2 only by a thin band along a fold, under a cell wide on the

@@ -7,12 +7,14 @@ import numpy as np
 import pytest
 
 from rpr3_gwr_core.exceptions import InvalidInputError
+from rpr3_gwr_core.io.scene_file import load_scene
 from rpr3_gwr_core.mechanisms import (DEFAULT_FIVE_BAR, DEFAULT_THREE_PRR, DEFAULT_THREE_RRR,
                                       PAPER_GEOMETRY)
 from rpr3_gwr_core.paper import rho1_slice
 from rpr3_gwr_core.workspace import build_roadmap
 from rpr3_gwr_core.world import (BodyModel, WorldIndex, body_model_from_dict,
-                                 configuration_collision, load_scene, path_collisions,
+                                 configuration_collision, mechanism_bodies,
+                                 path_collisions,
                                  scene_from_dict)
 from rpr3_gwr_core.world.collision import (INTERFERENCE, OBSTACLE, PASSIVE, STROKE,
                                            check_bodies, compile_scene)
@@ -110,13 +112,13 @@ def test_body_model_round_trip_and_validation():
             body_model_from_dict(data)
     pose = PAPER_GEOMETRY.direct_kinematics([17, 12, 18])[0]
     with pytest.raises(InvalidInputError, match="3 layers"):
-        PAPER_GEOMETRY.bodies(pose, [17, 12, 18], BodyModel(leg_layers=(1, 1)))
+        mechanism_bodies(PAPER_GEOMETRY, pose, [17, 12, 18], BodyModel(leg_layers=(1, 1)))
 
 
 def test_three_rpr_bodies():
     rho = np.array([17.0, 12.0, 18.0])
     poses = PAPER_GEOMETRY.direct_kinematics(rho)
-    bodies = PAPER_GEOMETRY.bodies(poses, rho)
+    bodies = mechanism_bodies(PAPER_GEOMETRY, poses, rho)
     assert bodies.names == ("leg1", "leg2", "leg3", "platform")
     assert bodies.capsules.shape == (len(poses), 3, 2, 2)
     assert np.allclose(bodies.capsules[:, :, 0], PAPER_GEOMETRY.base)
@@ -126,9 +128,9 @@ def test_three_rpr_bodies():
     assert bodies.pairs.size == 0
     assert np.allclose(bodies.passive[..., :3], PAPER_GEOMETRY.passive_angles(poses))
     # One layer: legs meet each other, never the platform they hold.
-    coplanar = PAPER_GEOMETRY.bodies(poses, rho, BodyModel(leg_layers=(0, 0, 0)))
+    coplanar = mechanism_bodies(PAPER_GEOMETRY, poses, rho, BodyModel(leg_layers=(0, 0, 0)))
     assert coplanar.pairs.tolist() == [[0, 1], [0, 2], [1, 2]]
-    housed = PAPER_GEOMETRY.bodies(poses, rho, BodyModel(housing_length=15.0))
+    housed = mechanism_bodies(PAPER_GEOMETRY, poses, rho, BodyModel(housing_length=15.0))
     assert housed.names[:2] == ("leg1_housing", "leg1_rod")
     housing = housed.capsules[:, 0]
     assert np.allclose(np.linalg.norm(housing[:, 1] - housing[:, 0], axis=-1), 15.0)
@@ -142,7 +144,7 @@ def test_moving_base_bodies(mechanism):
     count, poses = mechanism.solve(joints[None])
     poses = poses[0, :count[0]]
     assert count[0] > 0
-    bodies = mechanism.bodies(poses, joints)
+    bodies = mechanism_bodies(mechanism, poses, joints)
     assert bodies.names == ("proximal1", "distal1", "proximal2", "distal2", "proximal3",
                             "distal3", "platform")
     caps = bodies.capsules
@@ -152,7 +154,7 @@ def test_moving_base_bodies(mechanism):
     assert np.allclose(np.linalg.norm(caps[:, 1::2, 1] - caps[:, 1::2, 0], axis=-1),
                        mechanism.distal)
     assert np.allclose(bodies.polygons[:, 0], caps[:, 1::2, 1])
-    coplanar = mechanism.bodies(poses, joints, BodyModel(leg_layers=(1, 1, 1)))
+    coplanar = mechanism_bodies(mechanism, poses, joints, BodyModel(leg_layers=(1, 1, 1)))
     # Links of one leg share a joint; the distal links hold the platform.
     assert [0, 1] not in coplanar.pairs.tolist() and [1, 6] not in coplanar.pairs.tolist()
     assert [0, 2] in coplanar.pairs.tolist()
@@ -162,7 +164,7 @@ def test_five_bar_bodies_and_limits():
     joints = np.array([2.0, 1.0])
     count, poses = DEFAULT_FIVE_BAR.solve(joints[None])
     poses = poses[0, :count[0]]
-    bodies = DEFAULT_FIVE_BAR.bodies(poses, joints)
+    bodies = mechanism_bodies(DEFAULT_FIVE_BAR, poses, joints)
     assert bodies.names == ("proximal1", "distal1", "proximal2", "distal2")
     caps = bodies.capsules
     assert np.allclose(np.linalg.norm(caps[:, 0::2, 1] - caps[:, 0::2, 0], axis=-1), 0.09)
@@ -205,7 +207,7 @@ def test_kernel_kinds_and_reasons():
     near = scene_from_dict({"obstacles": [post], "limits": {"obstacle_clearance": 0.3}})
     found = configuration_collision(PAPER_GEOMETRY, near, rho, pose)
     assert found.body in ("leg2", "platform") and found.other == "post"
-    bodies = PAPER_GEOMETRY.bodies(np.stack([pose, pose]), np.stack([rho, rho]),
+    bodies = mechanism_bodies(PAPER_GEOMETRY, np.stack([pose, pose]), np.stack([rho, rho]),
                                    BodyModel(leg_layers=(1, 1, 1)))
     rows = check_bodies(compile_scene(scene_from_dict({}), PAPER_GEOMETRY, bodies), bodies,
                         np.stack([rho, rho]), chosen=np.array([1]))
@@ -305,7 +307,7 @@ def test_the_scene_index_moves_to_the_mapped_roadmap_without_the_first(tmp_path)
     scene = scene_from_dict({"obstacles": [{"id": 1, "disc": {"center": [5.0, 30.0],
                                                               "radius": 2.0}}]})
     world = first.apply_scene(scene)
-    save_planning_files(str(tmp_path), roadmap, first.planning_index)
+    save_planning_files(str(tmp_path), roadmap, first.search_index)
     mapped = Planner(*map_planning_files(str(tmp_path)))
     mapped.adopt_scene_indices(first)
     moved = mapped.apply_scene(scene)

@@ -1,2 +1,2 @@
 """Input and output: JSON and GEXF export, the on-disk roadmap cache,
-figures and the ``rpr3-gwr`` command-line tool."""
+mechanism and scene files and the ``rpr3-gwr`` command-line tool."""

@@ -9,7 +9,7 @@ Entries
 An entry is a folder named by :func:`cache_key` holding one ``.npy`` file per
 array of :func:`~rpr3_gwr_core.io.export.roadmap_arrays` (``links`` as
 ``links_0``, ``links_1``, ...), one per array of the roadmap's planning index
-(:func:`~rpr3_gwr_core.planning.planning_index`, as ``index_<name>``), one
+(:func:`~rpr3_gwr_core.planning.search_index`, as ``index_<name>``), one
 per table of its segmentation
 (:meth:`~rpr3_gwr_core.workspace.segmentation.Segmentation.tables`, as
 ``table_<name>``) with ``patch_area``, each patch's area, so that a load
@@ -91,10 +91,10 @@ import zlib
 import numpy as np
 
 from ..exceptions import InvalidInputError
-from ..planning.index import INDEX_TYPES, PlanningIndex
-from ..planning.planner import planning_index
+from ..planning.index import INDEX_TYPES, CellSearchIndex
+from ..planning.planner import build_cell_search_index
 from ..workspace import build_roadmap, refine
-from ..workspace._progress import part
+from ..workspace.progress import part
 from ..workspace.segmentation import TABLE_TYPES
 from .export import FIELD_TYPES, FORMAT, VERSION, roadmap_arrays, roadmap_from_arrays
 from .paths import default_cache_dir
@@ -218,14 +218,14 @@ def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=No
 def cached_planning(mechanism, grid, cache_dir=None, progress=None, refinement=None,
                     max_bytes=None, *, workers=map):
     """:func:`cached_roadmap` with the roadmap's planning index
-    (:func:`~rpr3_gwr_core.planning.planning_index`), built with it and
+    (:func:`~rpr3_gwr_core.planning.search_index`), built with it and
     stored in its entry: a :class:`~rpr3_gwr_core.planning.Planner` given
     both plans at once.
 
     Returns
     -------
     roadmap : Roadmap
-    index : PlanningIndex
+    index : CellSearchIndex
     hit : bool
         Whether they came from the cache.
     """
@@ -267,7 +267,7 @@ def cached_planning(mechanism, grid, cache_dir=None, progress=None, refinement=N
     report = part(progress)
     report("planning index", 0.7)
     begin = time.perf_counter()
-    index = planning_index(roadmap)
+    index = build_cell_search_index(roadmap)
     roadmap.timings["index"] = time.perf_counter() - begin
     report("storing in the cache", 0.99)
     try:
@@ -300,7 +300,7 @@ def find_cached_planning(mechanism, grid, cache_dir=None, *, workers=map):
 
     Returns
     -------
-    (Roadmap, PlanningIndex) or None
+    (Roadmap, CellSearchIndex) or None
         None when there is no such entry, when it is damaged (it is left to
         the next :func:`cached_planning` of it to rebuild), or when it was
         built on another grid (an adaptive grid refined elsewhere).
@@ -344,7 +344,7 @@ def map_planning_files(folder, *, workers=map):
     Returns
     -------
     roadmap : Roadmap
-    index : PlanningIndex
+    index : CellSearchIndex
 
     Raises
     ------
@@ -434,7 +434,7 @@ def _load(folder, expected=None, workers=map):
                                   check=not checked)
     if not checked:
         _check_values(roadmap.mechanism, roadmap.grid, arrays)
-    index = PlanningIndex.from_arrays(roadmap, index)
+    index = CellSearchIndex.from_arrays(roadmap, index)
     if not checked:
         _write_stamp(folder, stamp)
     return roadmap, index

@@ -11,11 +11,17 @@ Subcommands::
                      [--slice-figure FILE] [--slice-rho1 17]
     rpr3-gwr plan --rho1 17 --start RHO2 RHO3 ALPHA_DEG --goal RHO2 RHO3 ALPHA_DEG
                   [--smooth] [--weighted] [--feasibility-only]
-                  [--max-velocity V --max-acceleration A] [--time-limit SECONDS] [-o FILE]
+                  [--max-velocity V --max-acceleration A [--joint-limit NAME=V,A ...]]
+                  [--time-limit SECONDS] [-o FILE]
     rpr3-gwr plan --full --start RHO1 RHO2 RHO3 ALPHA_DEG --goal RHO1 RHO2 RHO3 ALPHA_DEG
                   [the options above]
     rpr3-gwr plan --mechanism FILE.yaml [--fix NAME=VALUE ...] --start JOINT ... MODE
                   --goal JOINT ... MODE [--mode-tol TOL] [the options above]
+    rpr3-gwr plan [--mechanism FILE.yaml ...] --start-pose X Y [ALPHA_DEG]
+                  --goal-pose X Y [ALPHA_DEG] [--start-working-mode=SIGNS]
+                  [--goal-working-mode=SIGNS] [the options above]
+                  (either end may be --start or --goal instead)
+    rpr3-gwr ik [--mechanism FILE.yaml] X Y [ALPHA_DEG]
     rpr3-gwr plot PLAN.json [-o FIGURE]
     rpr3-gwr cusps [--rho1 17] [--cache-dir DIR]
     rpr3-gwr cusps --mechanism FILE.yaml --fix NAME=VALUE [...] [--cache-dir DIR]
@@ -45,6 +51,7 @@ import os
 import sys
 
 from ..exceptions import GWRError
+from .limits import MAX_LEG
 from .paths import default_cache_dir
 
 __all__ = ["main", "ANGLES"]
@@ -56,12 +63,6 @@ ANGLES = ("Angles are in degrees [deg], in the arguments and in the JSON answer 
           "messages carry them.")
 """The unit rule of every command (their ``--help``): the core and the ROS
 interfaces work in radians, the command line converts."""
-
-# Longest leg the tool takes [length unit].  The direct kinematics weighs the
-# squared legs against the geometry's tens of units, so the leg residual of
-# its solutions grows with them (3e-7 at 1e6, 4e-3 at 1e10) until its
-# polynomial overflows near 1e77.
-MAX_LEG = 1e6
 
 
 class _Parser(argparse.ArgumentParser):
@@ -100,6 +101,19 @@ def _fixed_joint(text):
     if not equals or not name:
         raise argparse.ArgumentTypeError(f"{text!r} is not NAME=VALUE")
     return name, _finite(value)
+
+
+def _joint_limit(text):
+    """``NAME=V,A`` of ``--joint-limit``."""
+    name, equals, values = text.partition("=")
+    velocity, comma, acceleration = values.partition(",")
+    if not (equals and comma and name):
+        raise argparse.ArgumentTypeError(f"{text!r} is not NAME=V,A")
+    limits = _finite(velocity), _finite(acceleration)
+    if min(limits) < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: limits are 0 (keep the one for all "
+                                         "joints) or positive")
+    return name, *limits
 
 
 def _mechanism_options(command):
@@ -153,6 +167,15 @@ def _parser():
     dk.add_argument("--full", action="store_true",
                     help="with --patches: the full roadmap (the paper's, or the file's box)")
     dk.add_argument("--cache-dir", default=default_cache_dir())
+    ik = command("ik", "every working mode of a platform pose (the inverse kinematics): "
+                       "its branch sign per leg (+ or -), its joints [length unit, deg], "
+                       "aspect and signed margin, and whether the joints lie in the box "
+                       "(the file's, or the paper's full roadmap's)")
+    ik.add_argument("pose", type=_finite, nargs="+", metavar="X Y [ALPHA_DEG]",
+                    help="the pose: the platform vertex B1 and the orientation alpha [length "
+                         "unit, deg], or the five-bar's end point X Y")
+    ik.add_argument("--mechanism", metavar="FILE.yaml",
+                    help="a robot of your own (config/*.yaml) instead of the paper's 3-RPR")
     roadmap = command("roadmap", "build the roadmap and print a JSON summary (its cusps' "
                                  "angles [deg])")
     # The paper's slice; defaults filled in by the command, so that a
@@ -193,13 +216,23 @@ def _parser():
     _mechanism_options(plan)
     plan.add_argument("--full", action="store_true",
                       help="plan on the full 3-DOF roadmap: --start and --goal give rho1 first")
-    plan.add_argument("--start", type=_finite, nargs="+", required=True,
-                      metavar="[RHO1] RHO2 RHO3 ALPHA_DEG",
-                      help="the legs [length unit] (RHO1 with --full) and alpha [deg]; with "
-                           "--mechanism every joint, then the mode coordinate [length unit, "
-                           "deg for an angle]")
-    plan.add_argument("--goal", type=_finite, nargs="+", required=True,
-                      metavar="[RHO1] RHO2 RHO3 ALPHA_DEG", help="as --start")
+    for end in ("start", "goal"):
+        given = plan.add_mutually_exclusive_group(required=True)
+        given.add_argument(f"--{end}", type=_finite, nargs="+",
+                           metavar="[RHO1] RHO2 RHO3 ALPHA_DEG",
+                           help="the legs [length unit] (RHO1 with --full) and alpha [deg]; "
+                                "with --mechanism every joint, then the mode coordinate "
+                                "[length unit, deg for an angle]" if end == "start"
+                           else "as --start")
+        given.add_argument(f"--{end}-pose", type=_finite, nargs="+", metavar="X Y [ALPHA_DEG]",
+                           help=f"the {end} as a platform pose instead: B1 and alpha [length "
+                                "unit, deg] (the five-bar: its end point X Y); the working "
+                                "mode is the one a path reaches, of largest margin, unless "
+                                f"--{end}-working-mode names one")
+        plan.add_argument(f"--{end}-working-mode", metavar="SIGNS",
+                          help=f"with --{end}-pose: each leg's branch, + or - (the output of "
+                               f"'rpr3-gwr ik'), written --{end}-working-mode=-+- when it "
+                               "starts with -")
     plan.add_argument("--smooth", action="store_true", help="shortcut and round the path")
     plan.add_argument("--weighted", action="store_true", help="rank global paths by weighted cost")
     plan.add_argument("--feasibility-only", action="store_true",
@@ -209,6 +242,11 @@ def _parser():
     plan.add_argument("--max-acceleration", type=_finite,
                       help="joint acceleration limit [length unit/s^2, deg/s^2 for angular "
                            "joints]")
+    plan.add_argument("--joint-limit", type=_joint_limit, action="append", default=[],
+                      metavar="NAME=V,A",
+                      help="with --max-velocity and --max-acceleration: the speed and "
+                           "acceleration limits of one joint, in its unit (deg for an "
+                           "angle), 0 keeping the one for all joints; repeat for others")
     plan.add_argument("--alpha-tol-deg", type=_finite, default=1.0,
                       help="tolerance on the start and goal orientations [deg]")
     plan.add_argument("--mode-tol", type=_finite,

@@ -22,13 +22,15 @@ import time
 
 import numpy as np
 
-from ..exceptions import GWRError, InvalidInputError
+from ..exceptions import GWRError, InfeasiblePathError, InvalidInputError
 from ..mechanisms import Mechanism, mechanism_from_dict
+from ..mechanisms.base import working_mode_label
 from ..paper import FULL_BASE_GRID, FULL_REFINEMENT, PAPER_GEOMETRY, rho1_slice
-from ..workspace import Grid, build_roadmap
-from ..workspace._progress import part
+from ..workspace import build_roadmap
+from ..workspace.adaptive import grid_from_dict
 from ..workspace.grid import check_roadmap_grid
-from .cli import MAX_LEG
+from ..workspace.progress import part
+from .limits import MAX_LEG
 
 __all__ = ["run"]
 
@@ -38,7 +40,8 @@ _TRACE_STEP = 0.25
 
 def run(args):
     """Run the parsed command: ``(JSON-able result, exit code)``."""
-    commands = {"dk": _dk, "roadmap": _roadmap, "cusps": _cusps, "plan": _plan, "plot": _plot}
+    commands = {"dk": _dk, "ik": _ik, "roadmap": _roadmap, "cusps": _cusps, "plan": _plan,
+                "plot": _plot}
     progress = _Progress(sys.stderr)
     # The core's builds and loads run their chunks with this pool's map: a
     # thread a core (numpy, CRC-32 and the compiled kernels release the
@@ -182,16 +185,14 @@ def _cusps(args, progress, workers):
     if args.mechanism is None:
         mechanism, grid = PAPER_GEOMETRY, rho1_slice(args.rho1)
     else:
-        described, grid = _file_roadmap(args)
+        described, grid = _file_roadmap(args, progress, workers, free_joints=2,
+                                        purpose="cusps are points of 2-D slices")
         mechanism = described.mechanism
         # Refused before the roadmap is built: without its own equations the
         # mechanism would fail at the first seed.
         if type(mechanism).refine_cusp is Mechanism.refine_cusp:
             raise InvalidInputError(f"the {mechanism.kind} has no cusp equations: 'cusps' "
                                     "takes mechanisms that have them (the 3-RPR)")
-        if grid.ndim != 2:
-            raise InvalidInputError(f"cusps are points of 2-D slices: --fix all joints but "
-                                    f"two (the grid has {grid.ndim} axes)")
     roadmap, _ = cached_roadmap(mechanism, grid, args.cache_dir, progress, workers=workers)
     try:
         cusps = find_cusps(roadmap)
@@ -233,6 +234,68 @@ def _dk(args, progress, workers):
                                mechanism.margin(poses, joints))]
 
 
+def _ik(args, progress, workers):
+    """Every working mode of a pose: its joints, aspect, signed margin and
+    whether the joints lie in the box (the file's, or the paper's full
+    roadmap's)."""
+    if args.mechanism is not None:
+        from .mechanism_file import load_mechanism_file
+
+        described = load_mechanism_file(args.mechanism)
+        mechanism, axes = described.mechanism, described.axes
+    else:
+        mechanism, axes = PAPER_GEOMETRY, FULL_BASE_GRID.axes
+    pose = _pose_argument(mechanism, args.pose, "ik")
+    joint_angles, _ = _angles(mechanism)
+    answers = []
+    for signs, joints in zip(mechanism.working_modes, mechanism.inverse_kinematics(pose)):
+        if np.isnan(joints).any():
+            continue
+        margin = float(mechanism.margin(pose, joints))
+        answers.append({"working_mode": working_mode_label(signs),
+                        **_named(mechanism.joint_names, joints, joint_angles),
+                        "aspect": int(np.sign(margin)), "signed_margin": margin,
+                        "in_box": all(axis.periodic or axis.low <= joints[axis.joint] <= axis.high
+                                      for axis in axes)})
+    return answers
+
+
+def _pose_argument(mechanism, values, option):
+    """A pose of the command line [length unit, deg] in the core's units, a
+    float array of shape (pose_size,)."""
+    _, pose_angles = _angles(mechanism)
+    if len(values) != mechanism.pose_size:
+        raise InvalidInputError(f"{option} takes the {mechanism.kind}'s pose "
+                                f"{' '.join(_labels(mechanism.pose_names, pose_angles)).upper()}"
+                                f", got {len(values)} numbers")
+    if any(abs(v) > MAX_LEG for v, angle in zip(values, pose_angles) if not angle):
+        raise InvalidInputError(f"{option}: positions are at most {MAX_LEG:g} length units "
+                                "from the origin")
+    return np.array(_taken(values, pose_angles))
+
+
+def _pose_ends(args, mechanism):
+    """The ``--start-pose`` and ``--goal-pose`` of a plan as
+    :class:`~rpr3_gwr_core.planning.PoseEnd` (None for an end given as
+    joints), their working modes checked."""
+    from ..planning import PoseEnd
+
+    labels = [working_mode_label(m) for m in mechanism.working_modes]
+    ends = []
+    for end in ("start", "goal"):
+        pose, mode = getattr(args, f"{end}_pose"), getattr(args, f"{end}_working_mode")
+        if pose is None:
+            if mode is not None:
+                raise InvalidInputError(f"--{end}-working-mode needs --{end}-pose")
+            ends.append(None)
+            continue
+        if mode is not None and mode not in labels:
+            raise InvalidInputError(f"--{end}-working-mode is one of {', '.join(labels)} (a "
+                                    f"branch sign per leg), got {mode!r}")
+        ends.append(PoseEnd(tuple(_pose_argument(mechanism, pose, f"--{end}-pose")), mode))
+    return ends
+
+
 def _located_modes(args, mechanism, progress, workers):
     """``dk --patches`` / ``--from``: every mode located on the roadmap a plan
     of these joints uses, and with ``--from`` the command that plans to each
@@ -252,16 +315,13 @@ def _located_modes(args, mechanism, progress, workers):
                                                 progress, workers=workers)
             where = ["--rho1", f"{args.joints[0]:g}"]
     else:
-        from .mechanism_file import roadmap_grid
-
         if not args.full and not args.fix:
             args.fix = [(first, args.joints[0])]
         if args.full and args.fix:
             raise InvalidInputError("--full covers every joint: give it or --fix")
-        described, grid = _file_roadmap(args)
-        base, refinement = roadmap_grid(grid)
-        roadmap, index, _ = cached_planning(mechanism, base, args.cache_dir, progress,
-                                            refinement=refinement, workers=workers)
+        described, grid = _file_roadmap(args, progress, workers)
+        roadmap, index, _ = cached_planning(mechanism, grid, args.cache_dir, progress,
+                                            workers=workers)
         where = ["--mechanism", args.mechanism,
                  *(f"--fix {name}={value:g}" for name, value in args.fix)]
     start_mode = None
@@ -311,12 +371,10 @@ def _roadmap(args, progress, workers):
     start = time.perf_counter()
     if args.mechanism is not None:
         from .cache import cached_roadmap
-        from .mechanism_file import roadmap_grid
 
-        described, grid = _file_roadmap(args)
-        base, refinement = roadmap_grid(grid)
-        roadmap, hit = cached_roadmap(described.mechanism, base, args.cache_dir, progress,
-                                      refinement=refinement, workers=workers)
+        described, grid = _file_roadmap(args, progress, workers)
+        roadmap, hit = cached_roadmap(described.mechanism, grid, args.cache_dir, progress,
+                                      workers=workers)
         if args.slice_figure:
             raise InvalidInputError("--slice-figure needs --full")
     elif args.full:
@@ -336,9 +394,10 @@ def _roadmap(args, progress, workers):
     world = None
     if args.scene is not None:
         from ..planning import Planner
+        from .scene_file import load_scene
 
         progress("the scene's blocked solutions", 0.0)
-        world = _applied(Planner(roadmap), _load_scene(args.scene), _bodies(args), args.scene)
+        world = _applied(Planner(roadmap), load_scene(args.scene), _bodies(args), args.scene)
         progress("the scene's blocked solutions", 1.0)
         solutions = roadmap.segmentation.patch > 0
         summary["scene"] = {"file": args.scene, "parts": world.n_parts,
@@ -348,7 +407,7 @@ def _roadmap(args, progress, workers):
     summary["from_cache"] = hit
     if args.slice_figure:
         from ..workspace.cusps import find_cusps
-        from .figures import slice_figure
+        from ..figures import slice_figure
 
         cusps = find_cusps(build_roadmap(PAPER_GEOMETRY, rho1_slice(args.slice_rho1, step=0.25),
                                          workers=workers))
@@ -358,7 +417,7 @@ def _roadmap(args, progress, workers):
     if args.gexf:
         _save(args.gexf, roadmap_to_gexf(roadmap))
     if args.field_figure or args.roadmap_figure:
-        from .figures import field_figure, roadmap_figure
+        from ..figures import field_figure, roadmap_figure
 
         # Drawing takes as long as a slice's build: the progress names it.
         if args.field_figure:
@@ -402,13 +461,19 @@ def _paper_slice_options(args, names):
             setattr(args, name, defaults[name])
 
 
-def _file_roadmap(args):
+def _file_roadmap(args, progress, workers, free_joints=None, purpose=None):
     """The :class:`~.mechanism_file.MechanismFile` of ``--mechanism`` and the
-    grid of its box and ``--fix`` (angles in degrees)."""
-    from .mechanism_file import load_mechanism_file
+    grid of a roadmap of its box and ``--fix`` (angles in degrees),
+    :func:`~.mechanism_file.roadmap_grid`'s; with ``free_joints``, refused
+    for ``purpose`` unless it leaves that many joints free."""
+    from .mechanism_file import load_mechanism_file, roadmap_grid
 
     described = load_mechanism_file(args.mechanism)
     mechanism = described.mechanism
+    free = mechanism.n_joints - len({name for name, _ in args.fix})
+    if free_joints is not None and free != free_joints:
+        raise InvalidInputError(f"{purpose}: --fix all joints but {free_joints} (the grid "
+                                f"has {free} axes)")
     angle = dict(zip(mechanism.joint_names, _angles(mechanism)[0]))
     axes = dict(zip(mechanism.joint_names, described.axes))
     for name, value in args.fix:
@@ -419,10 +484,8 @@ def _file_roadmap(args):
             raise InvalidInputError(f"--fix {name}={value:g} deg lies outside its range "
                                     f"[{math.degrees(axis.low):g}, "
                                     f"{math.degrees(axis.high):g}] deg")
-    grid = described.grid({name: math.radians(value) if angle.get(name) else value
-                           for name, value in args.fix})
-    check_roadmap_grid(mechanism, grid)
-    return described, grid
+    fixed = {name: math.radians(value) if angle.get(name) else value for name, value in args.fix}
+    return described, roadmap_grid(described, fixed, progress=progress, workers=workers)
 
 
 def _bodies(args):
@@ -432,16 +495,6 @@ def _bodies(args):
     from .mechanism_file import load_mechanism_file
 
     return load_mechanism_file(args.mechanism).bodies
-
-
-def _load_scene(path):
-    """The scene of a file, its errors naming the file."""
-    from ..world import load_scene
-
-    try:
-        return load_scene(path)
-    except InvalidInputError as exc:
-        raise InvalidInputError(f"{path}: {exc}") from None
 
 
 def _applied(planner, scene, model, source):
@@ -466,10 +519,11 @@ def _plan(args, progress, workers):
                                 "--alpha-tol-deg")
     given = 4 if args.full else 3
     for name in ("start", "goal"):
-        if len(getattr(args, name)) != given:
+        if getattr(args, name) is not None and len(getattr(args, name)) != given:
             raise InvalidInputError(
                 f"--{name} takes {'RHO1 ' if args.full else ''}RHO2 RHO3 ALPHA_DEG"
                 f"{'' if args.full else ' (rho1 is --rho1; --full plans with rho1 free)'}")
+    poses = _pose_ends(args, PAPER_GEOMETRY)
     options = _options(args, PAPER_GEOMETRY, math.radians(args.alpha_tol_deg))
     if args.full:
         roadmap, index, _ = _full_roadmap(args.cache_dir, progress, workers)
@@ -479,32 +533,34 @@ def _plan(args, progress, workers):
         grid = rho1_slice(args.rho1, step=args.step)
         roadmap, index, _ = cached_planning(PAPER_GEOMETRY, grid, args.cache_dir, progress,
                                             workers=workers)
-        start, goal = (args.rho1, *args.start), (args.rho1, *args.goal)
+        start, goal = ((args.rho1, *legs) if legs is not None else None
+                       for legs in (args.start, args.goal))
         roadmap_doc = {"mechanism": PAPER_GEOMETRY.to_dict(), "grid": grid.to_dict()}
+    start, goal = (pose or joints for pose, joints in zip(poses, (start, goal)))
     return _answer(args, progress, roadmap, index, start, goal, options, roadmap_doc)
 
 
 def _plan_on_file(args, progress, workers):
     from .cache import cached_planning
-    from .mechanism_file import roadmap_grid
 
-    described, grid = _file_roadmap(args)
+    described, grid = _file_roadmap(args, progress, workers)
     mechanism = described.mechanism
     labels = _request_labels(mechanism)
     for name in ("start", "goal"):
-        if len(getattr(args, name)) != len(labels):
+        if getattr(args, name) is not None and len(getattr(args, name)) != len(labels):
             raise InvalidInputError(
                 f"--{name} takes {' '.join(labels[:-1]).upper()} and the mode coordinate "
                 f"{labels[-1].upper()} (angles in degrees)")
+    poses = _pose_ends(args, mechanism)
     tolerance = args.mode_tol
     if tolerance is not None and _request_angles(mechanism)[-1]:
         tolerance = math.radians(tolerance)
     options = _options(args, mechanism, tolerance)
-    base, refinement = roadmap_grid(grid)
-    roadmap, index, _ = cached_planning(mechanism, base, args.cache_dir, progress,
-                                        refinement=refinement, workers=workers)
+    roadmap, index, _ = cached_planning(mechanism, grid, args.cache_dir, progress,
+                                        workers=workers)
     roadmap_doc = {"mechanism": mechanism.to_dict(), "grid": grid.to_dict()}
-    return _answer(args, progress, roadmap, index, args.start, args.goal, options, roadmap_doc)
+    start, goal = (pose or joints for pose, joints in zip(poses, (args.start, args.goal)))
+    return _answer(args, progress, roadmap, index, start, goal, options, roadmap_doc)
 
 
 def _options(args, mechanism, mode_tol):
@@ -513,12 +569,37 @@ def _options(args, mechanism, mode_tol):
     from ..planning import PlanOptions
 
     tolerance = {} if mode_tol is None else {"mode_tol": mode_tol}
+    limits = (_joint_rate(mechanism, args.max_velocity, "max-velocity"),
+              _joint_rate(mechanism, args.max_acceleration, "max-acceleration"))
+    if args.joint_limit:
+        limits = _joint_limits(mechanism, limits, args.joint_limit)
     return PlanOptions(smooth=args.smooth, weighted=args.weighted,
-                       feasibility_only=args.feasibility_only,
-                       max_velocity=_joint_rate(mechanism, args.max_velocity, "max-velocity"),
-                       max_acceleration=_joint_rate(mechanism, args.max_acceleration,
-                                                    "max-acceleration"),
-                       **tolerance)
+                       feasibility_only=args.feasibility_only, max_velocity=limits[0],
+                       max_acceleration=limits[1], **tolerance)
+
+
+def _joint_limits(mechanism, limits, entries):
+    """Per-joint speed and acceleration limits in the core's joint units:
+    ``limits`` (for all joints, in those units) with the ``(name, speed,
+    acceleration)`` entries of ``--joint-limit`` (in the joint's unit, deg
+    for an angle; 0 keeps the limit for all joints) put in."""
+    if None in limits:
+        raise InvalidInputError("--joint-limit: give --max-velocity and --max-acceleration "
+                                "too, the limits of the joints it does not name")
+    names = mechanism.joint_names
+    joint_angles, _ = _angles(mechanism)
+    per_joint = [[limit] * len(names) for limit in limits]
+    named = set()
+    for name, *values in entries:
+        if name not in names or name in named:
+            raise InvalidInputError(f"--joint-limit: {name!r} is not a joint of the "
+                                    f"{mechanism.kind} ({', '.join(names)}), or is named twice")
+        named.add(name)
+        at = names.index(name)
+        for column, value in zip(per_joint, values):
+            if value:
+                column[at] = math.radians(value) if joint_angles[at] else value
+    return tuple(map(tuple, per_joint))
 
 
 def _request_angles(mechanism):
@@ -535,18 +616,28 @@ def _request_labels(mechanism):
 
 def _answer(args, progress, roadmap, index, start, goal, options, roadmap_doc):
     """The plan's JSON and exit code (1 when there is no plan); ``start`` and
-    ``goal`` as given (angles in degrees)."""
-    from ..planning import NEVER, Planner, Termination
+    ``goal`` as given (angles in degrees), or as a
+    :class:`~rpr3_gwr_core.planning.PoseEnd` (the core's units)."""
+    from ..planning import NEVER, Planner, PoseEnd, Termination, resolve_ends
 
     mechanism = roadmap.mechanism
     angles = _request_angles(mechanism)
+    _, pose_angles = _angles(mechanism)
     labels = _request_labels(mechanism)
+
+    def requested(end):
+        if not isinstance(end, PoseEnd):
+            return dict(zip(labels, map(float, end)))
+        shown = _named(mechanism.pose_names, end.pose, pose_angles)
+        return shown if end.working_mode is None else dict(shown, working_mode=end.working_mode)
+
     header = {"roadmap": roadmap_doc, "columns": _columns(mechanism),
-              "request": {"start": dict(zip(labels, map(float, start))),
-                          "goal": dict(zip(labels, map(float, goal)))}}
+              "request": {"start": requested(start), "goal": requested(goal)}}
     scene = model = None
     if args.scene is not None:
-        scene, model = _load_scene(args.scene), _bodies(args)
+        from .scene_file import load_scene
+
+        scene, model = load_scene(args.scene), _bodies(args)
         header["scene"] = scene.to_dict()
         # What the scene blocks depends on the bodies: 'plot' draws it with these.
         if model is not None:
@@ -558,13 +649,18 @@ def _answer(args, progress, roadmap, index, start, goal, options, roadmap_doc):
     try:
         termination = NEVER if args.time_limit is None else Termination.after(args.time_limit)
         progress("planning", 0.0)
-        plan = planner.plan(_taken(start, angles), _taken(goal, angles), options, termination,
-                            world)
+        ends = resolve_ends(planner, *(end if isinstance(end, PoseEnd) else _taken(end, angles)
+                                       for end in (start, goal)), options.mode_tol)
+        plan = planner.plan(ends.start, ends.goal, options, termination, world)
         progress("planning", 1.0)
         result = dict(header, **_plan_shown(plan.to_dict(), mechanism))
+        for end, mode in (("start", ends.start_mode), ("goal", ends.goal_mode)):
+            if mode is not None:
+                result[end]["working_mode"] = mode.label
         code = 0
     except GWRError as exc:
-        result = dict(header, feasible=False, reason=getattr(exc, "reason", exc.code.lower()),
+        reason = exc.reason if isinstance(exc, InfeasiblePathError) else None
+        result = dict(header, feasible=False, reason=reason or exc.code.lower(),
                       error={"code": exc.code, "message": str(exc)})
         code = 1
     result["plan_time_s"] = time.perf_counter() - begin
@@ -608,7 +704,7 @@ def _read_plan(path):
             plan = json.load(stream)
         mechanism = mechanism_from_dict(plan["roadmap"]["mechanism"])
         # A --full plan's roadmap is the paper's full 3-DOF one, named, not described.
-        grid = None if plan["roadmap"].get("full") else Grid.from_dict(plan["roadmap"]["grid"])
+        grid = None if plan["roadmap"].get("full") else grid_from_dict(plan["roadmap"]["grid"])
         if "error" in plan or not plan.get("waypoints"):
             raise InvalidInputError(f"{path} holds no trajectory to draw")
         if plan.get("columns") != _columns(mechanism):
@@ -654,19 +750,16 @@ def _plan_scene(path, plan):
 
 def _plot(args, progress, workers):
     from .cache import cached_planning
-    from .figures import plan_figure
+    from ..figures import plan_figure
 
     mechanism, grid, plan = _read_plan(args.plan_file)
     in_scene = _plan_scene(args.plan_file, plan)
     if grid is None:
         roadmap, index, _ = _full_roadmap(args.cache_dir, progress, workers)
     else:
-        from .mechanism_file import roadmap_grid
-
         check_roadmap_grid(mechanism, grid)
-        base, refinement = roadmap_grid(grid)
-        roadmap, index, _ = cached_planning(mechanism, base, args.cache_dir, progress,
-                                            refinement=refinement, workers=workers)
+        roadmap, index, _ = cached_planning(mechanism, grid, args.cache_dir, progress,
+                                            workers=workers)
     world = None
     if in_scene is not None:
         from ..planning import Planner

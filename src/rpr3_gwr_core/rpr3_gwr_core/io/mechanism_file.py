@@ -20,24 +20,52 @@ configuration the nodes start at: the joints, then the mode coordinate of
 its assembly mode (``[rho1, rho2, rho3, alpha]`` for the 3-RPR), in the
 box and off the singular locus.  ``config/`` holds one file per mechanism
 the suite knows.
+
+A file is UTF-8 YAML of at most
+:data:`~rpr3_gwr_core.documents.MAX_DOCUMENT_BYTES`
+(:func:`~rpr3_gwr_core.documents.read_document`: ``1e-3`` is a number);
+its numbers are at most :data:`MAX_MAGNITUDE` in magnitude, and ``true``
+and ``false`` are no numbers (only ``periodic`` takes them).
 """
 
 from dataclasses import dataclass
 import math
 import numbers
+import os
+import reprlib
 
 import numpy as np
 
-from ..exceptions import InvalidInputError
+from ..exceptions import GridSizeError, InvalidInputError
 from ..mechanisms import Mechanism, mechanism_class, mechanism_from_dict
 from ..planning.locate import DEFAULT_MODE_TOL
-from ..workspace.grid import Axis, Grid
+from ..workspace.adaptive import DEFAULT_REFINEMENT
+from ..workspace.grid import MAX_GRID_CELLS, Axis, Grid
 
 __all__ = ["MechanismFile", "load_mechanism_file", "mechanism_file_from_dict", "roadmap_grid",
-           "UNIFORM_CELLS", "HOME_SAMPLES", "HOME_MIN_MARGIN"]
+           "physical_memory", "UNIFORM_CELLS", "BYTES_PER_CELL", "ROADMAP_MEMORY_SHARE",
+           "HOME_SAMPLES", "HOME_MIN_MARGIN", "MAX_MAGNITUDE"]
+
+MAX_MAGNITUDE = 1e6
+"""Largest magnitude of a number of a mechanism file: lengths [length unit],
+angles [rad or deg], steps, cells and the home.  The direct kinematics
+lose their accuracy long before (the command line takes legs up to 1e6
+too), and the squares of larger numbers overflow."""
 
 UNIFORM_CELLS = 1_000_000
 """Largest box of all the joints built as a uniform grid [cells]."""
+
+BYTES_PER_CELL = 1_800
+"""Peak memory of a roadmap build with its planning index and messages, per
+cell [bytes]: the roadmap builder node's, the largest (the README's
+benchmark table has the measurement)."""
+
+ROADMAP_MEMORY_SHARE = 0.5
+"""Share of :func:`physical_memory` a roadmap of :func:`roadmap_grid` may take
+by default."""
+
+# Coarser steps tried before a refusal gives up naming the ones that fit.
+_FIT_ATTEMPTS = 6
 
 HOME_SAMPLES = 12
 """Values of each joint on the lattice a home is looked for on, when a file
@@ -139,24 +167,177 @@ class MechanismFile:
         return Grid(axes=axes, fixed=tuple(values))
 
 
-def roadmap_grid(grid):
-    """``(grid, refinement)`` to build a roadmap of a mechanism file's grid
-    on (:func:`~rpr3_gwr_core.io.cache.cached_roadmap`): a box of all the
-    joints with more than :data:`UNIFORM_CELLS` cells is refined adaptively
-    from a coarse base, only near the singular locus (the 3-RRR's 120-cell
-    torus has 1.7 million cells, adaptively 0.9 million); any other grid is
-    taken whole (refinement None).
+def roadmap_grid(described, fixed=None, *, memory=None, progress=None, workers=map):
+    """The grid to build a roadmap of a mechanism file's box on, some joints
+    fixed, that fits in memory.
+
+    A grid of the fixed joints' slice, or of a box with at most
+    :data:`UNIFORM_CELLS` cells, is the file's lattice itself.  A larger
+    box is refined adaptively (:func:`~rpr3_gwr_core.workspace.adaptive.refine`)
+    from a base grid ``DEFAULT_REFINEMENT`` times coarser than the file's
+    steps (rounded to whole base steps, so the fine lattice is the file's or
+    slightly finer): cells only near the singular locus, where features
+    live.  Either grid has at most as many cells as ``memory`` holds at
+    :data:`BYTES_PER_CELL` each (and :data:`~rpr3_gwr_core.workspace.grid.MAX_GRID_CELLS`).
+
+    Parameters
+    ----------
+    described : MechanismFile
+    fixed : mapping of str to float, optional
+        Joint name to value [joint unit] (:meth:`MechanismFile.grid`).
+    memory : int, optional
+        Memory a build may take [bytes]; by default
+        :data:`ROADMAP_MEMORY_SHARE` of :func:`physical_memory`.
+    progress : callable, optional
+        Called as ``progress(stage, fraction)`` while a large box is refined.
+    workers : callable, optional
+        A map-like callable the refinement solves the base grid with.
+
+    Returns
+    -------
+    GridBase
+        A :class:`~rpr3_gwr_core.workspace.grid.Grid` or an
+        :class:`~rpr3_gwr_core.workspace.adaptive.AdaptiveGrid`, checked by
+        :func:`~rpr3_gwr_core.workspace.grid.check_roadmap_grid`.
 
     Raises
     ------
     InvalidInputError
-        If a large box's axes do not divide into the refinement's blocks.
+        If ``fixed`` is malformed (:meth:`MechanismFile.grid`), the grid
+        would not fit, naming the steps that fit, or it would be empty.
     """
-    from ..workspace.adaptive import DEFAULT_REFINEMENT, coarse_base
+    from ..workspace.adaptive import refine
+    from ..workspace.grid import check_roadmap_grid
 
-    if grid.fixed or grid.size <= UNIFORM_CELLS:
-        return grid, None
-    return coarse_base(grid, DEFAULT_REFINEMENT), DEFAULT_REFINEMENT
+    if not isinstance(described, MechanismFile):
+        raise InvalidInputError(f"roadmap_grid takes a MechanismFile, got "
+                                f"{type(described).__name__}")
+    if memory is None:
+        memory = int(ROADMAP_MEMORY_SHARE * physical_memory())
+    if isinstance(memory, bool) or not isinstance(memory, numbers.Integral) or memory <= 0:
+        raise InvalidInputError(f"memory is a positive number of bytes, got {memory!r}")
+    max_cells = min(MAX_GRID_CELLS, int(memory) // BYTES_PER_CELL)
+    fixed = dict(fixed or {})
+    free = [a for a, name in zip(described.axes, described.mechanism.joint_names)
+            if name not in fixed]
+    if fixed or math.prod(a.count for a in free) <= UNIFORM_CELLS:
+        size = math.prod(a.count for a in free)
+        if size > max_cells:
+            raise InvalidInputError(_too_large(described, f"{size:,} cells", max_cells, memory,
+                                               _fitting_factor(free, max_cells), fixed))
+        grid = described.grid(fixed)
+        check_roadmap_grid(described.mechanism, grid)
+        return grid
+
+    def built(axes):
+        return refine(described.mechanism, _coarse_grid(axes), DEFAULT_REFINEMENT,
+                      max_cells=max_cells, progress=progress, workers=workers)
+
+    try:
+        grid = built(described.axes)
+    except GridSizeError as exc:
+        size = (f"{exc.size:,} cells" if exc.limit == max_cells
+                else f"a fine lattice of {exc.size:,} points (at most {exc.limit:,})")
+        raise InvalidInputError(_too_large(
+            described, size, max_cells, memory,
+            _adaptive_fitting_factor(built, described.axes, exc), fixed)) from None
+    check_roadmap_grid(described.mechanism, grid)
+    return grid
+
+
+def physical_memory():
+    """The machine's physical memory [bytes]; where the system does not tell,
+    what :data:`~rpr3_gwr_core.workspace.grid.MAX_GRID_CELLS` cells take."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        return MAX_GRID_CELLS * BYTES_PER_CELL
+
+
+def _coarse_grid(axes):
+    """The base grid ``DEFAULT_REFINEMENT`` times coarser than the axes, in
+    whole base steps over each range (a periodic axis' turn in whole cells)."""
+    r = DEFAULT_REFINEMENT
+    base = []
+    for a in axes:
+        if a.periodic:
+            cells = -(-a.count // r)
+            step = 2 * math.pi / cells
+            base.append(Axis(a.joint, -math.pi, math.pi - step, step, periodic=True))
+        else:
+            steps = max(1, -(-(a.count - 1) // r))
+            base.append(Axis(a.joint, a.low, a.high, (a.high - a.low) / steps))
+    return Grid(axes=tuple(base))
+
+
+def _coarser(axes, factor):
+    """The axes with steps ``factor`` times longer: a bounded axis' step
+    rounded up to two significant digits, a turn's cells down to a multiple
+    of ``DEFAULT_REFINEMENT``."""
+    coarser = []
+    for a in axes:
+        if a.periodic:
+            r = DEFAULT_REFINEMENT
+            cells = max(2 * r, int(a.count / factor) // r * r)
+            step = 2 * math.pi / cells
+            coarser.append(Axis(a.joint, -math.pi, math.pi - step, step, periodic=True))
+        else:
+            step = a.step * factor
+            scale = 10.0 ** (math.floor(math.log10(step)) - 1)
+            step = math.ceil(step / scale - 1e-9) * scale
+            coarser.append(Axis(a.joint, a.low, a.high, min(step, a.high - a.low or step)))
+    return tuple(coarser)
+
+
+def _fitting_factor(axes, max_cells):
+    """Smallest factor of the steps, in tenths, that leaves a lattice of at
+    most ``max_cells`` cells."""
+    factor = max(1.1, (math.prod(a.count for a in axes) / max_cells) ** (1 / len(axes)))
+    while math.prod(a.count for a in _coarser(axes, factor)) > max_cells:
+        factor *= 1.1
+    return factor
+
+
+def _adaptive_fitting_factor(built, axes, error):
+    """A factor of the file's steps whose adaptive grid fits, each guess
+    refined: the refined cells near the singular locus grow as the steps'
+    power ``1 - d``, the fine lattice's points as their power ``-d``."""
+    factor, d = 1.0, len(axes)
+    for _ in range(_FIT_ATTEMPTS):
+        factor *= max(1.1, (error.size / error.limit) ** (1 / max(d - 1, 1)))
+        try:
+            built(_coarser(axes, factor))
+        except GridSizeError as exc:
+            error = exc
+        else:
+            return factor
+    return None
+
+
+def _too_large(described, size, max_cells, memory, factor, fixed):
+    """Why a file's box is refused, with the steps of its free joints that
+    would fit."""
+    names = described.mechanism.joint_names
+    advice = ""
+    if factor is not None:
+        steps = []
+        for name, a in zip(names, _coarser(described.axes, factor)):
+            if name in fixed:
+                continue
+            if a.periodic:
+                steps.append(f"{name} cells {a.count}")
+            elif described.mechanism.angular_joints[names.index(name)]:
+                steps.append(f"{name} step_deg {math.degrees(a.step):.3g}")
+            else:
+                steps.append(f"{name} step {a.step:g}")
+        advice = f"; these steps fit: {', '.join(steps)}"
+        if not fixed:
+            advice += " (or fix a joint)"
+    return (f"the roadmap of the {described.mechanism.kind}'s "
+            f"{'slice' if fixed else 'whole box'} would have {size}, more than a build may take:"
+            f" {max_cells:,} cells, the fewer of {memory / 2 ** 30:.1f} GiB of memory at "
+            f"{BYTES_PER_CELL} bytes a cell and the limit of a grid, {MAX_GRID_CELLS:,}"
+            f"{advice}")
 
 
 def load_mechanism_file(path):
@@ -165,17 +346,16 @@ def load_mechanism_file(path):
     Raises
     ------
     InvalidInputError
-        If the file is not YAML or does not describe a mechanism and its box.
+        If the file is larger than
+        :data:`~rpr3_gwr_core.documents.MAX_DOCUMENT_BYTES`, is not UTF-8
+        YAML or does not describe a mechanism and its box: one line, naming
+        the file.
     OSError
-        If it cannot be read.
+        If it cannot be opened or read.
     """
-    import yaml
+    from ..documents import read_document
 
-    with open(path, encoding="utf-8") as stream:
-        try:
-            document = yaml.safe_load(stream)
-        except yaml.YAMLError as exc:
-            raise InvalidInputError(f"{path} is not YAML: {exc}") from None
+    document = read_document(path, "mechanism file")
     try:
         return mechanism_file_from_dict(document)
     except InvalidInputError as exc:
@@ -188,12 +368,16 @@ def mechanism_file_from_dict(document):
     Raises
     ------
     InvalidInputError
-        If it does not describe a mechanism and its box.
+        If it does not describe a mechanism and its box: a key missing or
+        unknown, a boolean for a number, a number larger than
+        :data:`MAX_MAGNITUDE`, ``leg_layers`` not one per leg, and the
+        checks of the mechanism, the grid and the home.
     """
     if not isinstance(document, dict) or not {"mechanism", "joints"} <= set(document) \
             or not set(document) <= {"mechanism", "joints", "bodies", "home"}:
         raise InvalidInputError("a mechanism file has the keys 'mechanism' and 'joints', "
                                 "and may have 'bodies' and 'home'")
+    _check_numbers(document)
     mechanism = mechanism_from_dict(_in_radians(document["mechanism"]))
     joints = document["joints"]
     names = mechanism.joint_names
@@ -206,11 +390,46 @@ def mechanism_file_from_dict(document):
         axes.append(_axis(k, joint, mechanism.angular_joints[k]))
     bodies = None
     if "bodies" in document:
-        from ..world import body_model_from_dict  # the world loads only when a file needs it
+        from ..world import body_model_from_dict, mechanism_bodies  # only when a file needs it
 
         bodies = body_model_from_dict(document["bodies"])
+        try:
+            # The bodies of any configuration tell whether the layers fit the legs.
+            mechanism_bodies(mechanism, np.zeros(mechanism.pose_size),
+                             np.zeros(mechanism.n_joints), bodies)
+        except InvalidInputError as exc:
+            raise InvalidInputError(f"'bodies': {exc}") from None
     home = _home(mechanism, axes, document["home"]) if "home" in document else None
     return MechanismFile(mechanism=mechanism, axes=tuple(axes), bodies=bodies, home=home)
+
+
+def _check_numbers(document):
+    """Refuse a boolean in the mechanism's parameters or a joint's range and
+    a number larger than :data:`MAX_MAGNITUDE` anywhere, naming where it is
+    (the home's and the bodies' own checks refuse their booleans, and each
+    value's NaN and infinity)."""
+    pending, seen = [(None, document)], set()
+    while pending:  # a loop, not a recursion: a document may nest deeply
+        where, value = pending.pop()
+        if isinstance(value, (dict, list)):
+            if id(value) in seen:  # a list given twice, or one inside itself
+                continue
+            seen.add(id(value))
+        if isinstance(value, dict):
+            pending += [(str(key) if where is None else f"{where}.{key}", item)
+                        for key, item in value.items()]
+        elif isinstance(value, list):
+            pending += [(f"{where}[{k}]", item) for k, item in enumerate(value)]
+        elif isinstance(value, bool):
+            if where.startswith(("mechanism", "joints")) and not where.endswith("periodic"):
+                raise InvalidInputError(f"'{where}' is {str(value).lower()}: a number is "
+                                        "expected")
+        elif isinstance(value, numbers.Real) and value == value \
+                and value not in (math.inf, -math.inf) \
+                and not -MAX_MAGNITUDE <= value <= MAX_MAGNITUDE:
+            raise InvalidInputError(f"'{where}' = {reprlib.repr(value)} is out of range: a "
+                                    f"mechanism file's numbers are at most {MAX_MAGNITUDE:g} "
+                                    "in magnitude")
 
 
 def _home(mechanism, axes, values):

@@ -3,7 +3,7 @@ the five-bar, the 3-RRR and the 3-PRR."""
 
 import importlib
 
-from .._lazy import lazy_exports
+from ..lazy import lazy_exports
 from . import base
 from .base import Mechanism, register_mechanism
 

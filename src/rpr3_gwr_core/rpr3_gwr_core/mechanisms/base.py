@@ -19,6 +19,7 @@ in one compiled loop.
 
 import abc
 import dataclasses
+import itertools
 import math
 import numbers
 
@@ -28,12 +29,16 @@ from numba.core.types.function_type import CompileResultWAP
 import numpy as np
 
 from ..exceptions import InvalidInputError
-from ..world.bodies import assemble_bodies
 from .continuation import STEP_KERNEL_SIGNATURE
 
 __all__ = ["Mechanism", "mechanism_class", "mechanism_from_dict", "register_mechanism",
            "STEP_KERNEL_SIGNATURE", "PREDICT_KERNEL_SIGNATURE", "first_class",
-           "positive_length", "finite_vectors"]
+           "positive_length", "finite_vectors", "working_mode_label", "revolute_leg_angles",
+           "compiled_pose_distance"]
+
+# A leg's reach compared with rounding: a point at exactly a leg's full
+# stretch (or fold) computes a cosine beyond 1 by a few ulps, and is reached.
+_REACH_ROUNDING = 1e-12
 
 # ``kernel(parameters, poses, joints_from, joints_to, out)``: the Euler
 # predictor of :meth:`Mechanism.predict` for the rows of ``poses`` (k,
@@ -121,6 +126,48 @@ def finite_vectors(values, what, size):
     return values
 
 
+def working_mode_label(signs):
+    """A working mode's branch signs as text, one character a leg: ``(+1, -1,
+    +1)`` is ``"+-+"``."""
+    return "".join("+" if sign > 0 else "-" for sign in signs)
+
+
+def revolute_leg_angles(base, point, proximal, distal):
+    """The actuated angles of an RR leg: a proximal link turning about
+    ``base`` to an elbow ``C``, a distal link from ``C`` to ``point``.
+
+    Parameters
+    ----------
+    base, point : ndarray, shape (..., 2)
+        The turning joint A and the distal link's far end B [length unit],
+        broadcast together.
+    proximal, distal : float
+        The links' lengths |AC| and |CB| [length unit].
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+        The angle of AC [rad] in (-pi, pi] on each branch: first the one
+        whose elbow angle (the direction of CB relative to AC) lies in
+        ``[0, pi]``, ``cross(C - A, B - C) >= 0`` (sign +1), then the other
+        (sign -1); NaN on both where ``|AB|`` is beyond the links' reach (or
+        0, where every angle or none is a solution).
+    """
+    reach = np.asarray(point, dtype=float) - np.asarray(base, dtype=float)
+    length = np.hypot(reach[..., 0], reach[..., 1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cosine = (proximal * proximal + length * length - distal * distal) / (
+            2.0 * proximal * length)
+    reached = np.abs(cosine) <= 1.0 + _REACH_ROUNDING
+    # The elbow lies at the angle psi from AB, on the side the sign names:
+    # cross(C - A, B - C) = |AC| |AB| sin(phi - theta).
+    psi = np.arccos(np.clip(np.where(reached, cosine, 0.0), -1.0, 1.0))
+    phi = np.arctan2(reach[..., 1], reach[..., 0])
+    angles = np.stack([phi - psi, phi + psi], axis=-1)
+    angles = np.arctan2(np.sin(angles), np.cos(angles))
+    return np.where(reached[..., None], angles, np.nan)
+
+
 class Mechanism(abc.ABC):
     """A parallel mechanism: joints, poses and the equations between them.
 
@@ -137,6 +184,11 @@ class Mechanism(abc.ABC):
     mode_coordinate : int
         The pose coordinate a request gives, beside the joints, to choose an
         assembly mode (the nearest solution in it is taken).
+    leg_branches : int
+        Joint values of one leg at one pose: 1 where a pose fixes each
+        joint (the 3-RPR's legs), 2 where each leg has two branches (an
+        elbow or a slider on either side); the inverse kinematics has
+        ``leg_branches ** n_joints`` working modes.
     max_solutions : int
         Most direct-kinematic solutions of one joint vector.
     scale : float
@@ -150,6 +202,7 @@ class Mechanism(abc.ABC):
     pose_names = ()
     angular = ()
     mode_coordinate = 0
+    leg_branches = 1
     max_solutions = 0
     angle_parameters = ()
 
@@ -194,6 +247,69 @@ class Mechanism(abc.ABC):
         poses : ndarray, shape (n, max_solutions, pose_size)
             Sorted in a fixed order per joint vector, NaN beyond ``count``.
         """
+
+    def leg_joints(self, poses):
+        """Each leg's actuated joint at poses, on each of its branches (the
+        closed-form inverse kinematics, leg by leg).
+
+        Parameters
+        ----------
+        poses : ndarray, shape (..., pose_size)
+            Finite.
+
+        Returns
+        -------
+        ndarray, shape (..., n_joints, leg_branches)
+            [joint unit], angles in (-pi, pi]; branch 0 is sign +1 of
+            :attr:`working_modes`, branch 1 sign -1; NaN where the leg
+            cannot reach the pose.
+
+        Raises
+        ------
+        NotImplementedError
+            For mechanisms without a closed-form inverse kinematics.
+        """
+        raise NotImplementedError(f"{self.kind} has no inverse kinematics")
+
+    @property
+    def working_modes(self):
+        """The working modes, one branch sign (+1 or -1) per leg, in the
+        order of :meth:`inverse_kinematics`: every combination, +1 before
+        -1 and the first leg's sign varying slowest.
+
+        Returns
+        -------
+        ndarray of int8, shape (leg_branches ** n_joints, n_joints)
+        """
+        signs = (1, -1)[:self.leg_branches]
+        return np.array(list(itertools.product(signs, repeat=self.n_joints)), dtype=np.int8)
+
+    def inverse_kinematics(self, poses):
+        """The joints of every working mode of platform poses.
+
+        Parameters
+        ----------
+        poses : array_like, shape (..., pose_size)
+            Finite (:attr:`pose_names`, angles [rad]).
+
+        Returns
+        -------
+        ndarray, shape (..., n_modes, n_joints)
+            The joints [joint unit] of each working mode of
+            :attr:`working_modes`, angles in (-pi, pi]; a row of NaN where a
+            leg of that mode cannot reach the pose.  Whether they lie in a
+            joint box is the caller's to check.
+
+        Raises
+        ------
+        InvalidInputError
+            If the poses are not finite numbers of shape (..., pose_size).
+        """
+        poses = finite_vectors(poses, "poses", self.pose_size)
+        legs = self.leg_joints(poses)
+        branch = (1 - self.working_modes.astype(np.intp)) // 2
+        joints = legs[..., np.arange(self.n_joints), branch]
+        return np.where(np.isnan(joints).any(axis=-1, keepdims=True), np.nan, joints)
 
     @abc.abstractmethod
     def margin(self, poses, joints):
@@ -311,37 +427,6 @@ class Mechanism(abc.ABC):
         """
         raise NotImplementedError(f"{self.kind} does not describe its bodies")
 
-    def bodies(self, poses, joints, model=None):
-        """The moving bodies of configurations as capsules and polygons.
-
-        Parameters
-        ----------
-        poses : array_like, shape (..., pose_size)
-        joints : array_like, shape (..., n_joints)
-            The joints the poses solve, broadcast against ``poses``.
-        model : BodyModel, optional
-            Widths and layers (:class:`~rpr3_gwr_core.world.bodies.BodyModel`);
-            the default puts each leg in a layer of its own.
-
-        Returns
-        -------
-        Bodies
-            :class:`~rpr3_gwr_core.world.bodies.Bodies`, batch shape the
-            broadcast of the two leading shapes.
-
-        Raises
-        ------
-        InvalidInputError
-            If poses or joints are not finite or of the wrong size, or the
-            model's layers do not fit the legs.
-        """
-        poses = finite_vectors(poses, "poses", self.pose_size)
-        joints = finite_vectors(joints, "joints", self.n_joints)
-        shape = np.broadcast_shapes(poses.shape[:-1], joints.shape[:-1])
-        poses = np.broadcast_to(poses, shape + poses.shape[-1:])
-        joints = np.broadcast_to(joints, shape + joints.shape[-1:])
-        return assemble_bodies(self.body_outline(poses, joints), model, self.scale)
-
     def check_joints(self, joints):
         """Raise ``InvalidInputError`` for joint values the mechanism cannot take.
 
@@ -421,10 +506,26 @@ def _coordinate_difference(a, b, angular, scale):
 
 
 @numba.njit(cache=True, nogil=True)
-def _distance(a, b, angular, scale):
-    """:meth:`Mechanism.pose_distance` of two poses, ``angular`` per
-    coordinate: squares summed from the first coordinate on, as numpy's norm
-    sums them."""
+def compiled_pose_distance(a, b, angular, scale):
+    """:meth:`Mechanism.pose_distance` of two poses, compiled, for kernels.
+
+    The squares are summed from the first coordinate on, as numpy's norm
+    sums them, so that it agrees with the method to the bit.
+
+    Parameters
+    ----------
+    a, b : ndarray, shape (pose_size,)
+        The poses [pose units].
+    angular : ndarray of bool, shape (pose_size,)
+        Which coordinates are angles [rad], compared the short way round.
+    scale : float
+        The length [length unit] that makes an angle a length.
+
+    Returns
+    -------
+    float
+        [length unit].
+    """
     total = 0.0
     for k in range(a.size):
         difference = _coordinate_difference(a[k], b[k], angular[k], scale)
@@ -445,12 +546,12 @@ def _pose_differences(a, b, angular, scale):
 
 @numba.njit(cache=True, nogil=True)
 def _pose_distances(a, b, angular, scale):
-    """:func:`_distance` of the rows of ``a`` and ``b``, shape (n, pose_size):
-    continuity and the field ask for millions, and numpy's temporaries cost
+    """:func:`compiled_pose_distance` of the rows of ``a`` and ``b``, shape
+    (n, pose_size): continuity and the field ask for millions, and numpy's temporaries cost
     more than the arithmetic."""
     out = np.empty(a.shape[0])
     for r in range(a.shape[0]):
-        out[r] = _distance(a[r], b[r], angular, scale)
+        out[r] = compiled_pose_distance(a[r], b[r], angular, scale)
     return out
 
 
@@ -463,7 +564,8 @@ def _separation(poses, count, angular, scale):
             nearest = np.inf
             for other in range(count[cell]):
                 if other != slot:
-                    distance = _distance(poses[cell, other], poses[cell, slot], angular, scale)
+                    distance = compiled_pose_distance(poses[cell, other], poses[cell, slot],
+                                                      angular, scale)
                     # np.minimum's: a NaN, once met, stays.
                     if nearest == nearest and not nearest <= distance:
                         nearest = distance

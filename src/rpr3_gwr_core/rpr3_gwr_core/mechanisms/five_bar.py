@@ -35,7 +35,7 @@ import numpy as np
 
 from ..exceptions import InvalidInputError, SingularityError
 from .base import (PREDICT_KERNEL_SIGNATURE, STEP_KERNEL_SIGNATURE, Mechanism, finite_vectors,
-                   first_class, positive_length, register_mechanism)
+                   first_class, positive_length, register_mechanism, revolute_leg_angles)
 
 __all__ = ["FiveBar", "DEFAULT_FIVE_BAR", "COINCIDENT_ELBOWS"]
 
@@ -67,8 +67,12 @@ class FiveBar(Mechanism):
 
     Joints are the actuated angles ``(th1, th2)`` [rad] of the proximal
     links at ``A1 = (0, 0)`` and ``A2 = (d, 0)``; poses are the end
-    effector ``(x, y)`` [m], and ``y`` chooses the assembly mode of a
-    request.  Batches follow
+    effector ``(x, y)`` [m] (the point P where the distal links meet), and
+    ``y`` chooses the assembly mode of a request.  A pose has up to 4
+    working modes (:meth:`inverse_kinematics`), one elbow branch per leg:
+    sign +1 where the elbow angle (``elbow{i}`` of :meth:`body_outline`,
+    the direction of ``C_i P`` relative to ``A_i C_i``) lies in
+    ``[0, pi]``, -1 where it lies in ``(-pi, 0)``.  Batches follow
     :class:`~rpr3_gwr_core.mechanisms.base.Mechanism`: joints and poses
     ``(..., 2)``; :meth:`solve` takes joints ``(n, 2)`` and gives counts
     ``(n,)`` (uint8) and poses ``(n, 2, 2)``, ``M + h n`` (aspect +1)
@@ -98,6 +102,7 @@ class FiveBar(Mechanism):
     pose_names = ("x", "y")
     angular = (False, False)
     mode_coordinate = 1
+    leg_branches = 2
     max_solutions = 2
 
     def __post_init__(self):
@@ -178,6 +183,24 @@ class FiveBar(Mechanism):
         passive = [("elbow1", relative[..., 0]), ("elbow2", relative[..., 1]),
                    ("end", relative[..., 2])]
         return links, [], passive
+
+    def leg_joints(self, poses):
+        """Each leg's angle at end points on both of its branches
+        (:meth:`Mechanism.leg_joints`).
+
+        Parameters
+        ----------
+        poses : array_like, shape (..., 2)
+            ``(x, y)`` of P [m], finite.
+
+        Returns
+        -------
+        ndarray, shape (..., 2, 2)
+            ``th_i`` [rad] in (-pi, pi]; NaN where a leg cannot reach P.
+        """
+        poses = finite_vectors(poses, "poses", 2)
+        bases = np.array([[0.0, 0.0], [self.d, 0.0]])
+        return revolute_leg_angles(bases, poses[..., None, :], self.l1, self.l2)
 
     def solve(self, joints):
         joints = finite_vectors(joints, "joints", 2)

@@ -12,9 +12,9 @@ equations are ``F_i = |B_i - C_i|**2 - l**2 = 0``; with ``u_i = B_i - C_i``
 
 As the 3-RRR (:mod:`.rrr3`), with the sliders fixed the 3-PRR is a 3-RPR
 whose base points are the slider joints and whose legs all have length
-``l``: both share that reduction (``rrr3._MovingBaseRPR``: the 3-RPR's
-batch solver with base points per joint vector, its margin, predictor and
-corrector), and differ only in how ``C_i`` and ``dC_i/dq_i`` follow from the
+``l``: both share that reduction (:class:`~.moving_base.MovingBaseRPR`:
+the three-leg solver with base points per joint vector, its margin,
+predictor and corrector), and differ only in how ``C_i`` and ``dC_i/dq_i`` follow from the
 joints.  The sliders' joints are lengths, not angles: no axis is periodic,
 and the stroke range is the box of the mechanism file
 (``config/three_prr.yaml``).  A serial singularity (``u_i`` perpendicular to
@@ -27,22 +27,34 @@ from dataclasses import dataclass
 import math
 import numbers
 
+import numpy as np
+
 from ..exceptions import InvalidInputError
 from .base import positive_length, register_mechanism
+from .moving_base import MovingBaseRPR
 from .rpr3 import beta_from_sides
-from .rrr3 import _MovingBaseRPR
 
 __all__ = ["ThreePRR", "DEFAULT_THREE_PRR"]
+
+# A leg's reach compared with rounding [l**2]: a platform point at exactly
+# the distal link's length from the rail computes a negative square by a
+# few ulps, and is reached.
+_REACH_ROUNDING = 1e-12
 
 
 @register_mechanism("3-PRR")
 @dataclass(frozen=True)
-class ThreePRR(_MovingBaseRPR):
+class ThreePRR(MovingBaseRPR):
     """The planar 3-PRR parallel manipulator.
 
     Joints are the actuated sliders ``(s1, s2, s3)`` [length unit]; poses are
-    ``(x, y, alpha)`` [length unit, length unit, rad] as the 3-RPR's, and
-    ``alpha`` chooses the assembly mode of a request.  Batches follow
+    ``(x, y, alpha)`` [length unit, length unit, rad] as the 3-RPR's (B1
+    and the platform's orientation), and ``alpha`` chooses the assembly
+    mode of a request.  A pose has up to 8 working modes
+    (:meth:`inverse_kinematics`), one slider branch per leg: along its rail
+    the slider joint ``C_i`` lies beyond the foot of ``B_i``'s perpendicular
+    (``(B_i - C_i) . (cos gamma_i, sin gamma_i) <= 0``, the larger ``s_i``)
+    on sign +1, before it on sign -1.  Batches follow
     :class:`~rpr3_gwr_core.mechanisms.base.Mechanism`: joints and poses
     ``(..., 3)``; :meth:`solve` takes joints ``(n, 3)`` and gives counts
     ``(n,)`` (uint8) and poses ``(n, 6, 3)`` sorted by alpha in (-pi, pi],
@@ -122,6 +134,19 @@ class ThreePRR(_MovingBaseRPR):
         # Sliders along the unit vectors (cos gamma_i, sin gamma_i).
         return (0.0, 1.0, *(f(g) for g in (self.gamma1, self.gamma2, self.gamma3)
                             for f in (math.cos, math.sin)))
+
+    def _legs_reaching(self, points):
+        # |A_i + s e_i - B_i| = l: s = t +- sqrt(t**2 - |B_i - A_i|**2 + l**2)
+        # with t = (B_i - A_i) . e_i, the larger root first (sign +1).
+        rails = np.array([[math.cos(g), math.sin(g)]
+                          for g in (self.gamma1, self.gamma2, self.gamma3)])
+        reach = points - self.platform.base
+        along = np.sum(reach * rails, axis=-1)
+        square = along * along - np.sum(reach * reach, axis=-1) + self.l * self.l
+        reached = square >= -_REACH_ROUNDING * self.l * self.l
+        half_chord = np.sqrt(np.where(reached, np.maximum(square, 0.0), 0.0))
+        sliders = np.stack([along + half_chord, along - half_chord], axis=-1)
+        return np.where(reached[..., None], sliders, np.nan)
 
     def slider_joints(self, joints):
         """Slider joints ``C_i = A_i + s_i (cos gamma_i, sin gamma_i)`` of

@@ -1,4 +1,4 @@
-"""Compiled graph kernels of the local planner: the node graph, and one
+"""Compiled graph kernels of the cell search: the node graph, and one
 least-cost search that serves both an A* through the layers of a global path
 and the distances inside a patch that guide it.
 

@@ -3,7 +3,7 @@
 Feasibility comes from the roadmap alone: two patches are connectible exactly
 when they lie in one connected component of the GWR.  At the grid's
 resolution this is a guarantee both ways: every path the roadmap connects is
-realised by the local planner, which crosses only gates.
+realised by the cell search, which crosses only gates.
 
 Global paths are the shortest sequences of patches (fewest gates, as in the
 paper, whose A* search is unweighted); all of them are returned, ranked by
@@ -21,7 +21,7 @@ import numpy as np
 
 from ..exceptions import InvalidInputError
 
-__all__ = ["Feasibility", "GlobalPath", "RoadmapIndex", "feasibility", "global_paths",
+__all__ = ["Feasibility", "GlobalPath", "PatchGraph", "feasibility", "global_paths",
            "longer_paths"]
 
 NARROW_PENALTY = 1.0
@@ -59,13 +59,14 @@ class GlobalPath:
     cost: float
 
 
-class RoadmapIndex:
-    """Precomputed lookups of a roadmap for repeated global queries.
+class PatchGraph:
+    """The roadmap's patches as a graph, with the lookups of repeated global
+    queries: connected components, aspects, and gate edges weighted by length.
 
     Parameters
     ----------
     roadmap : Roadmap
-    index : PlanningIndex
+    index : CellSearchIndex
         The roadmap's: it holds the patches' centroids and the gates' middles.
     narrow_penalty : float
         Weight of ``step / width`` in the weighted edge cost.
@@ -112,7 +113,7 @@ def feasibility(index, start_patch, goal_patch):
 
     Parameters
     ----------
-    index : RoadmapIndex
+    index : PatchGraph
     start_patch, goal_patch : int
 
     Returns
@@ -134,7 +135,7 @@ def global_paths(index, start_patch, goal_patch, weighted=False, max_paths=8):
 
     Parameters
     ----------
-    index : RoadmapIndex
+    index : PatchGraph
     start_patch, goal_patch : int
     weighted : bool
         Rank by weighted cost (A* on edge costs, then the next simple paths
@@ -172,7 +173,7 @@ def longer_paths(index, start_patch, goal_patch):
 
     Parameters
     ----------
-    index : RoadmapIndex
+    index : PatchGraph
     start_patch, goal_patch : int
 
     Yields

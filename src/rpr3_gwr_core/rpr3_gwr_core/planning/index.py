@@ -1,5 +1,5 @@
-"""The planning index of a roadmap: everything a local search reads, built
-once and only read afterwards.
+"""The cell search index of a roadmap: everything a cell search reads,
+built once and only read afterwards.
 
 It holds the node graph (one node per solution of a patch's cell, joined by
 the continuation links within patches and across gates), the nodes of each
@@ -7,12 +7,12 @@ patch next to each of its gates, the node costs of given clearance weights
 and, for given clearances, each patch's distances to each of its gates,
 which guide the searches (:mod:`~.astar`); and the centroids of the patches
 and the middles of their gates, which weigh the global search's edges
-(:class:`~.global_planning.RoadmapIndex`).  The gate distances are most of
+(:class:`~.global_planning.PatchGraph`).  The gate distances are most of
 the work of building one: seconds on the full 3-DOF roadmap, a few tenths
 on the paper's slice.
 
-An index is plain named arrays (:meth:`PlanningIndex.arrays`,
-:meth:`PlanningIndex.from_arrays`), so the roadmap cache
+An index is plain named arrays (:meth:`CellSearchIndex.arrays`,
+:meth:`CellSearchIndex.from_arrays`), so the roadmap cache
 (:mod:`~rpr3_gwr_core.io.cache`) stores it beside its roadmap and a process
 maps the files instead of computing it; several processes mapping them share
 one copy of their pages.
@@ -27,8 +27,8 @@ from .astar import (NodeCosts, NodeGraph, adjacency, edge_quanta, gate_distances
 from ..exceptions import InvalidInputError
 from ..workspace.segmentation import linked_solutions
 
-__all__ = ["PlanningIndex", "INDEX_TYPES", "LOW_MARGIN_FACTOR", "COST_UNITS", "patch_depth",
-           "patch_costs"]
+__all__ = ["CellSearchIndex", "INDEX_TYPES", "LOW_MARGIN_FACTOR", "COST_UNITS",
+           "patch_depth", "patch_costs"]
 
 LOW_MARGIN_FACTOR = 100
 """A node whose margin is below the clearance costs this many times more."""
@@ -49,10 +49,10 @@ INDEX_TYPES = {
     "weights": "<f8", "node_costs": "<i8", "cost_floors": "<i8", "centroids": "<f8",
     "gate_middles": "<f8",
 }
-"""The arrays of an index (:meth:`PlanningIndex.arrays`) and their dtypes."""
+"""The arrays of an index (:meth:`CellSearchIndex.arrays`) and their dtypes."""
 
 
-class PlanningIndex:
+class CellSearchIndex:
     """The read-only lookups of one roadmap's local searches (module doc).
 
     Build one with :meth:`build`, or restore one with :meth:`from_arrays`.
@@ -166,14 +166,14 @@ class PlanningIndex:
         weights : sequence of float
             Clearance weights (the paper's ``w``, finite, non-negative) to
             compute the node costs of; 0 needs none.
-        graph_from : PlanningIndex, optional
+        graph_from : CellSearchIndex, optional
             An index of the same roadmap whose node graph is taken rather
             than built again; returned as it is when it holds the gate
             distances and node costs asked for already.
 
         Returns
         -------
-        PlanningIndex
+        CellSearchIndex
 
         Raises
         ------
@@ -224,7 +224,7 @@ class PlanningIndex:
             If the arrays do not index this roadmap.
         """
         if set(arrays) != set(INDEX_TYPES):
-            raise InvalidInputError("the arrays are not a planning index's")
+            raise InvalidInputError("the arrays are not a cell search index's")
         for name, dtype in INDEX_TYPES.items():
             if arrays[name].dtype != np.dtype(dtype):
                 raise InvalidInputError(f"index array {name} is {arrays[name].dtype}, "
@@ -332,7 +332,7 @@ def patch_gate_distances(index, pair, clearance, work):
 
     Parameters
     ----------
-    index : PlanningIndex
+    index : CellSearchIndex
     pair : int
     clearance : float
     work : WorkArrays
@@ -372,7 +372,7 @@ def patch_costs(segmentation, index, weight, k):
 
 
 def _check_index(roadmap, arrays):
-    """The shapes and index ranges of :meth:`PlanningIndex.from_arrays`."""
+    """The shapes and index ranges of :meth:`CellSearchIndex.from_arrays`."""
     seg = roadmap.segmentation
     pids, offsets = arrays["pids"], arrays["offsets"]
     if not np.array_equal(pids, sorted(seg.patches)):

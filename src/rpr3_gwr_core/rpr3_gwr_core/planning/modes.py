@@ -151,7 +151,7 @@ def assembly_modes(planner, joints, start_mode=None, mode_tol=None):
                 same = located.patch == start.patch and np.allclose(
                     pose, start.pose, rtol=0, atol=1e-9 * mechanism.scale)
                 found["feasibility"] = "start" if same else feasibility(
-                    planner.global_index, start.patch, located.patch).reason
+                    planner.patch_graph, start.patch, located.patch).reason
         modes.append(AssemblyMode(configuration, pose.copy(), 1 if margin > 0 else -1,
                                   float(margin), **found))
     return modes

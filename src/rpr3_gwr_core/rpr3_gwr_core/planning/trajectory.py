@@ -5,21 +5,22 @@ which needs the roadmap, is :func:`~.segments.shortcut_path`).  The caller
 validates the result and puts back what the validator refuses.
 
 Timing is a velocity profile along the path's arc length s: the speed
-``v(s)`` is capped so that no joint moves faster than ``max_velocity``, and
-at each corner so that the change of joint velocity across it stays within
-half of ``max_acceleration``; forward and backward passes then bound the
-acceleration along the path, ``v dv/ds``, by the other half, starting and
-ending at rest.  A segment takes its length over the mean of its end speeds,
-and never less than its length at the speed cap (a segment between two rests
-would otherwise be timed by the acceleration alone).  Durations are rounded
-up to whole nanoseconds, the resolution of a ROS ``Duration``, so that a
-consumer's rounding cannot speed a segment up.  Where a joint's velocity
-changes between two waypoints faster than the acceleration limit, the speed
-there is lowered and the profile redone.  The limits therefore hold between
-the points, for a consumer that moves each joint linearly from point to
-point: every segment's joint change over its duration is within
-``max_velocity``, and the change of the point velocities over it within
-``max_acceleration``.
+``v(s)`` is capped so that no joint moves faster than its ``max_velocity``,
+and at each corner so that the change of each joint's velocity across it
+stays within half of its ``max_acceleration``; forward and backward passes
+then bound the acceleration along the path, ``v dv/ds``, by the other half
+of the smallest, starting and ending at rest.  Limits are per joint, as
+MoveIt's joint limits give them, or one for all joints.  A segment takes its
+length over the mean of its end speeds, and never less than its length at
+the speed cap (a segment between two rests would otherwise be timed by the
+acceleration alone).  Durations are rounded up to whole nanoseconds, the
+resolution of a ROS ``Duration``, so that a consumer's rounding cannot speed
+a segment up.  Where a joint's velocity changes between two waypoints faster
+than the acceleration limit, the speed there is lowered and the profile
+redone.  The limits therefore hold between the points, for a consumer that
+moves each joint linearly from point to point: every segment's change of a
+joint over its duration is within the joint's ``max_velocity``, and the
+change of its point velocities over it within its ``max_acceleration``.
 """
 
 import math
@@ -78,10 +79,10 @@ def time_parameterize(path, max_velocity, max_acceleration):
     ----------
     path : ndarray, shape (n, n_joints)
         Waypoints [joint unit], no two consecutive ones equal.
-    max_velocity : float
-        Largest joint speed [joint unit / s].
-    max_acceleration : float
-        Largest joint acceleration [joint unit / s**2].
+    max_velocity : float or array_like, shape (n_joints,)
+        Largest speed of every joint, or of each [joint unit / s].
+    max_acceleration : float or array_like, shape (n_joints,)
+        Largest acceleration of every joint, or of each [joint unit / s**2].
 
     Returns
     -------
@@ -90,25 +91,28 @@ def time_parameterize(path, max_velocity, max_acceleration):
     velocities : ndarray, shape (n, n_joints)
         Joint velocities at the waypoints [joint unit / s]: differences of
         the positions over the times (central inside, zero at the ends), so
-        they integrate back to the path and never exceed ``max_velocity``.
+        they integrate back to the path and never exceed a joint's
+        ``max_velocity``.
     accelerations : ndarray, shape (n, n_joints)
         Joint accelerations at the waypoints [joint unit / s**2]: central
         differences of the velocities (one-sided at the ends).  Where the
-        velocities change faster than ``max_acceleration`` between two
+        velocities change faster than a joint's ``max_acceleration`` between two
         waypoints, the speed there is lowered and the profile recomputed, so
         these and the accelerations between the points respect it.
 
     Raises
     ------
     InvalidInputError
-        If a limit is not positive and finite, or the limits are so far from
+        If a limit is not positive and finite, a list of limits does not
+        have one per joint, or the limits are so far from
         the path's scale that the times or derivatives are not finite, or
         two waypoints would be at most a nanosecond apart.
     """
-    if not (math.isfinite(max_velocity) and max_velocity > 0
-            and math.isfinite(max_acceleration) and max_acceleration > 0):
-        raise InvalidInputError("velocity and acceleration limits must be positive and finite")
     path = np.asarray(path, dtype=float)
+    velocity_limits = _joint_limits(max_velocity, path.shape[1])
+    acceleration_limits = _joint_limits(max_acceleration, path.shape[1])
+    shown = (f"max_velocity = {_shown_limits(velocity_limits)} and "
+             f"max_acceleration = {_shown_limits(acceleration_limits)}")
     n = len(path)
     if n == 1:
         return np.zeros(1), np.zeros_like(path), np.zeros_like(path)
@@ -117,28 +121,33 @@ def time_parameterize(path, max_velocity, max_acceleration):
     if np.any(length == 0):
         raise InvalidInputError("consecutive waypoints must differ")
     direction = delta / length[:, None]
-    # Fastest speed along each segment that keeps every joint within the limit.
-    segment_cap = max_velocity / np.max(np.abs(direction), axis=1)
-    cap = np.full(n, np.inf)
-    cap[:-1] = segment_cap
-    cap[1:] = np.minimum(cap[1:], segment_cap)
-    turn = np.max(np.abs(direction[1:] - direction[:-1]), axis=1)
-    span = 0.5 * (length[1:] + length[:-1])
-    half = 0.5 * max_acceleration
-    # Straight corners divide by 0, and extreme limits overflow or underflow
+    # Joints a segment or a corner does not move divide by 0 (no bound from
+    # them), straight corners too, and extreme limits overflow or underflow
     # in here; the result is checked below.
     with np.errstate(all="ignore"):
-        cap[1:-1] = np.minimum(cap[1:-1], np.sqrt(half * span / turn))
+        # Fastest speed along each segment that keeps every joint within its limit.
+        segment_cap = np.min(velocity_limits / np.abs(direction), axis=1)
+        cap = np.full(n, np.inf)
+        cap[:-1] = segment_cap
+        cap[1:] = np.minimum(cap[1:], segment_cap)
+        turn = np.abs(direction[1:] - direction[:-1])
+        span = 0.5 * (length[1:] + length[:-1])
+        half = 0.5 * acceleration_limits
+        cap[1:-1] = np.minimum(cap[1:-1], np.sqrt(span * np.min(half / turn, axis=1)))
+        # Along the path, a joint accelerates at most at v dv/ds.
+        half = float(np.min(half))
         cap[0] = cap[-1] = 0.0
         for _ in range(_MAX_REFINEMENTS):
             speed = _speed_profile(cap, length, half)
             times = _times(speed, length, segment_cap, half)
             velocities = _velocities(path, times)
             accelerations = _differences(velocities, times)
-            # The fastest change of any joint velocity on either side of a waypoint.
-            change = np.max(np.abs(np.diff(velocities, axis=0)), axis=1) / np.diff(times)
+            # The fastest change of a joint velocity, over its limit, on
+            # either side of a waypoint.
+            change = (np.max(np.abs(np.diff(velocities, axis=0)) / acceleration_limits, axis=1)
+                      / np.diff(times))
             excess = np.maximum(np.concatenate([[0.0], change]),
-                                np.concatenate([change, [0.0]])) / max_acceleration
+                                np.concatenate([change, [0.0]]))
             if np.all(excess <= 1.0):
                 break
             # Lower the speed around each offending waypoint and try again.
@@ -148,17 +157,37 @@ def time_parameterize(path, max_velocity, max_acceleration):
                 cap[k] = np.minimum(cap[k], speed[k] / np.sqrt(np.maximum(excess[k], 1.0)) * 0.9)
     if np.all(np.isfinite(times)) and np.any(np.diff(np.round(times * _NANOSECONDS)) < 2):
         raise InvalidInputError(
-            f"max_velocity = {max_velocity:g} and max_acceleration = {max_acceleration:g} are so "
-            "high that two waypoints are at most 1 ns apart: lower them")
+            f"{shown} are so high that two waypoints are at most 1 ns apart: lower them")
     # Limits far from the path's scale (1e-300, 1e300) overflow or underflow
     # the profile: such a request cannot be timed, and must not look timed.
     if not (np.all(np.isfinite(times)) and np.all(np.diff(times) > 0)
             and np.all(np.isfinite(velocities)) and np.all(np.isfinite(accelerations))
             and np.all(excess <= 1.0)):
         raise InvalidInputError(
-            f"max_velocity = {max_velocity:g} and max_acceleration = {max_acceleration:g} cannot "
-            f"time this path in floating point (duration {times[-1]:g} s)")
+            f"{shown} cannot time this path in floating point (duration {times[-1]:g} s)")
     return times, velocities, accelerations
+
+
+def _joint_limits(limits, n_joints):
+    """One positive, finite limit per joint, from one for all or one each."""
+    try:
+        values = np.asarray(limits, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"a limit must be a number or one per joint, got "
+                                f"{limits!r:.80}") from None
+    if values.shape not in ((), (n_joints,)):
+        raise InvalidInputError(f"give one limit for all joints or one per joint "
+                                f"({n_joints}), got {values.size}")
+    if not np.all(np.isfinite(values) & (values > 0)):
+        raise InvalidInputError("velocity and acceleration limits must be positive and finite")
+    return np.broadcast_to(values, (n_joints,))
+
+
+def _shown_limits(limits):
+    """One limit, or the list of them."""
+    if np.all(limits == limits[0]):
+        return f"{limits[0]:g}"
+    return "[" + ", ".join(f"{v:g}" for v in limits) + "]"
 
 
 _MAX_REFINEMENTS = 60

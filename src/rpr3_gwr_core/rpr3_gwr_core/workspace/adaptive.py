@@ -55,11 +55,12 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse.csgraph import dijkstra
 
-from ..exceptions import InvalidInputError
-from ._progress import part
+from ..exceptions import GridSizeError, InvalidInputError
 from .continuity import match_solutions
 from .field import compute_field
-from .grid import MAX_GRID_CELLS, Axis, Grid, GridBase, _box_points, _within_box, lattice_box
+from .grid import (MAX_GRID_CELLS, Axis, Grid, GridBase, box_points, lattice_box,
+                   within_box)
+from .progress import part
 
 __all__ = ["AdaptiveGrid", "refine", "grid_from_dict", "coarse_base", "DEFAULT_REFINEMENT",
            "DEFAULT_REFINE_MARGIN"]
@@ -86,6 +87,9 @@ class AdaptiveGrid(GridBase):
     blocks : array_like of int
         Flat indices of the refined blocks, row-major over the block array
         of shape ``base.shape - 1``.
+    max_cells : int, optional
+        Most cells it may have, at most :data:`~.grid.MAX_GRID_CELLS` (the
+        default).
 
     Attributes
     ----------
@@ -95,13 +99,14 @@ class AdaptiveGrid(GridBase):
     Raises
     ------
     InvalidInputError
-        If an argument is malformed, the fine lattice has more than
-        ``_MAX_LATTICE_POINTS`` points or the grid more than
-        :data:`~.grid.MAX_GRID_CELLS` cells (both checked before the cells
-        are listed).
+        If an argument is malformed.
+    GridSizeError
+        If the fine lattice has more than ``_MAX_LATTICE_POINTS`` points or
+        the grid more than ``max_cells`` cells (both checked before the
+        cells are listed).
     """
 
-    def __init__(self, base, refinement, blocks):
+    def __init__(self, base, refinement, blocks, *, max_cells=MAX_GRID_CELLS):
         if not isinstance(base, Grid):
             raise InvalidInputError(f"an adaptive grid refines a Grid, got {type(base).__name__}")
         if (isinstance(refinement, bool) or not isinstance(refinement, numbers.Integral)
@@ -118,23 +123,27 @@ class AdaptiveGrid(GridBase):
         if blocks.size and (blocks[0] < 0 or blocks[-1] >= math.prod(self.block_shape)):
             raise InvalidInputError("refined block index outside the base grid")
         self.blocks = blocks
+        if (isinstance(max_cells, bool) or not isinstance(max_cells, numbers.Integral)
+                or not 0 < max_cells <= MAX_GRID_CELLS):
+            raise InvalidInputError(f"max_cells is an integer in [1, {MAX_GRID_CELLS}], "
+                                    f"got {max_cells!r}")
         r = self.refinement
         self.fine_shape = tuple(n * r if a.periodic else (n - 1) * r + 1
                                 for n, a in zip(base.shape, base.axes))
         if math.prod(self.fine_shape) > _MAX_LATTICE_POINTS:
-            raise InvalidInputError(
+            raise GridSizeError(
                 f"refining {base.shape} base points {r} times gives a fine lattice of "
                 f"{math.prod(self.fine_shape)} points, more than the limit of "
-                f"{_MAX_LATTICE_POINTS}")
+                f"{_MAX_LATTICE_POINTS}", math.prod(self.fine_shape), _MAX_LATTICE_POINTS)
         self.axes = tuple(Axis(a.joint, a.low, a.low + a.step * (a.count - 1 / r if a.periodic
                                                                  else a.count - 1),
                                a.step / r, a.periodic)
                           for a in base.axes)
-        self._index = self._sample_points()
+        self._index = self._sample_points(int(max_cells))
         self._pairs = None
         self._volumes = None
 
-    def _sample_points(self):
+    def _sample_points(self, max_cells):
         """Fine flat index of every cell, ascending."""
         r = self.refinement
         refined = np.zeros(self.block_shape, dtype=bool)
@@ -156,8 +165,9 @@ class AdaptiveGrid(GridBase):
                 along[r::r] |= along[r - 1::r]
         taken[tuple(slice(None, None, r) for _ in self.fine_shape)] = True
         size = int(np.count_nonzero(taken))
-        if size > MAX_GRID_CELLS:
-            raise InvalidInputError(f"grid of {size} cells exceeds the limit of {MAX_GRID_CELLS}")
+        if size > max_cells:
+            raise GridSizeError(f"grid of {size} cells exceeds the limit of {max_cells}",
+                                size, max_cells)
         return np.flatnonzero(taken)
 
     def __eq__(self, other):
@@ -328,11 +338,11 @@ class AdaptiveGrid(GridBase):
         """Cells whose axis values lie within ``radius`` fine steps of a point
         along every axis, ascending (:meth:`.Grid.cells_in_box`)."""
         point = self._wrapped(point)
-        index = _box_points(point, radius, np.array([a.low for a in self.axes]),
+        index = box_points(point, radius, np.array([a.low for a in self.axes]),
                             np.array(self.steps), np.array(self.fine_shape), self._periodic)
         cells = self._lookup(np.ravel_multi_index(tuple(index.T), self.fine_shape))
         cells = cells[cells >= 0]
-        return _within_box(cells, self.coordinates_of(cells), point, radius, self.steps,
+        return within_box(cells, self.coordinates_of(cells), point, radius, self.steps,
                            self.periods)
 
     def coordinates_of(self, cells):
@@ -502,7 +512,7 @@ def coarse_base(grid, refinement=DEFAULT_REFINEMENT):
 
 
 def refine(mechanism, base, refinement=DEFAULT_REFINEMENT, min_margin=DEFAULT_REFINE_MARGIN, *,
-           progress=None, workers=map):
+           max_cells=MAX_GRID_CELLS, progress=None, workers=map):
     """The adaptive grid of a base grid under the refinement rule (module doc).
 
     Parameters
@@ -514,6 +524,8 @@ def refine(mechanism, base, refinement=DEFAULT_REFINEMENT, min_margin=DEFAULT_RE
         Fine points per base step, at least 2.
     min_margin : float
         Rule 3's margin, non-negative.
+    max_cells : int, optional
+        Most cells of the adaptive grid (:class:`AdaptiveGrid`).
     progress : callable, optional
         Called as ``progress(stage, fraction)`` (the stage's name, the
         fraction of the work done) as the base field is solved and each
@@ -529,6 +541,14 @@ def refine(mechanism, base, refinement=DEFAULT_REFINEMENT, min_margin=DEFAULT_RE
     -------
     AdaptiveGrid
 
+    Raises
+    ------
+    InvalidInputError
+        If an argument is malformed.
+    GridSizeError
+        If the grid would have more than ``max_cells`` cells, or its fine
+        lattice too many points.
+
     Examples
     --------
     A coarse slice at rho1 = 17 refined four times near the singular curve:
@@ -542,7 +562,8 @@ def refine(mechanism, base, refinement=DEFAULT_REFINEMENT, min_margin=DEFAULT_RE
         raise InvalidInputError(f"refine takes a Grid, got {type(base).__name__}")
     if not (math.isfinite(min_margin) and min_margin >= 0):
         raise InvalidInputError(f"min_margin must be finite and >= 0, got {min_margin}")
-    AdaptiveGrid(base, refinement, ())  # validates before the field is computed
+    # Validates before the field is computed.
+    AdaptiveGrid(base, refinement, (), max_cells=max_cells)
     report = part(progress, within="refinement")
     field = compute_field(mechanism, base, progress=part(report, 0.0, 0.6, "base grid"),
                           workers=workers)
@@ -575,6 +596,6 @@ def refine(mechanism, base, refinement=DEFAULT_REFINEMENT, min_margin=DEFAULT_RE
             if corner[axis]:
                 continue
             uniform &= _corner_view(edges, corner, periodic, blocks)
-    grid = AdaptiveGrid(base, refinement, np.flatnonzero(~uniform.ravel()))
+    grid = AdaptiveGrid(base, refinement, np.flatnonzero(~uniform.ravel()), max_cells=max_cells)
     report("blocks picked", 1.0)
     return grid

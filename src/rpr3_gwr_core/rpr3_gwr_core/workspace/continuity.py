@@ -21,7 +21,7 @@ the faces it leaves unsure are tracked.
 import numba
 import numpy as np
 
-from ..mechanisms.base import _distance
+from ..mechanisms.base import compiled_pose_distance
 
 
 __all__ = ["neighbour_pairs", "match_solutions"]
@@ -194,7 +194,8 @@ def _screen(predict, parameters, faces, solutions, space, metric):
                         (target[j] - joints[source, j]) / periods[j])
             predict(parameters, poses[source, :n], joints[source], target, predicted[:n])
             for slot in range(n):
-                err = _distance(poses[destination, slot], predicted[slot], angular, scale) / scale
+                err = compiled_pose_distance(poses[destination, slot], predicted[slot], angular,
+                                             scale) / scale
                 gap = separation[destination, slot] / scale
                 if not (err < _SCREEN_TOL and gap > _SCREEN_RATIO * err):
                     sure = False

@@ -20,7 +20,7 @@ import numba
 import numpy as np
 
 from ..exceptions import InvalidInputError, OutOfGridError
-from ._progress import part
+from .progress import part
 
 __all__ = ["Cusp", "find_cusps", "known_cusps", "cusp_curves"]
 

@@ -11,7 +11,7 @@ import functools
 
 import numpy as np
 
-from ._progress import part
+from .progress import part
 
 __all__ = ["NSolutionField", "compute_field"]
 

@@ -22,11 +22,11 @@ import numbers
 import numba
 import numpy as np
 
-from ..exceptions import InvalidInputError, OutOfGridError
+from ..exceptions import GridSizeError, InvalidInputError, OutOfGridError
 from .continuity import neighbour_pairs
 
 __all__ = ["Axis", "GridBase", "Grid", "MAX_GRID_CELLS", "check_roadmap_grid", "lattice_box",
-           "lattice_cell"]
+           "lattice_cell", "box_points", "within_box"]
 
 # Most cells of any grid, about 4 million (2000 x 2000): a roadmap build
 # takes about 0.75 kB per cell at its peak (a process building a 1001 x 1001
@@ -321,7 +321,8 @@ class Grid(GridBase):
                                     f"each, got {joints}")
         size = math.prod(a.count for a in axes)
         if size > MAX_GRID_CELLS:
-            raise InvalidInputError(f"grid of {size} cells exceeds the limit of {MAX_GRID_CELLS}")
+            raise GridSizeError(f"grid of {size} cells exceeds the limit of {MAX_GRID_CELLS}",
+                                size, MAX_GRID_CELLS)
         # Cell volumes and face measures are products of steps: no product of
         # some of them may overflow.
         if not math.isfinite(math.prod(max(a.step, 1.0) for a in axes)):
@@ -468,10 +469,10 @@ class Grid(GridBase):
         ndarray of int
         """
         point = self._wrapped(point)
-        index = _box_points(point, radius, np.array([a.low for a in self.axes]),
+        index = box_points(point, radius, np.array([a.low for a in self.axes]),
                             np.array(self.steps), np.array(self.shape), self.periods > 0)
         cells = np.unique(np.ravel_multi_index(tuple(index.T), self.shape))
-        return _within_box(cells, self.coordinates_of(cells), point, radius, self.steps,
+        return within_box(cells, self.coordinates_of(cells), point, radius, self.steps,
                            self.periods)
 
     def coordinates_of(self, cells):
@@ -551,10 +552,29 @@ def check_roadmap_grid(mechanism, grid, min_region_cells=8):
             "its roadmap would be empty")
 
 
-def _box_points(point, radius, low, steps, shape, periodic=None):
-    """Lattice indices within ``radius`` steps of ``point`` on every axis (one
-    more on each side, against rounding; the caller filters exactly), clipped
-    to ``shape`` (wrapped along the ``periodic`` axes), shape (m, ndim)."""
+def box_points(point, radius, low, steps, shape, periodic=None):
+    """The lattice indices around a point, a superset of those within a box.
+
+    One index more than ``radius`` steps on each side, against rounding: the
+    caller filters exactly (:func:`within_box`).
+
+    Parameters
+    ----------
+    point : array_like, shape (ndim,)
+        [joint units].
+    radius : float
+        Half the box's side [steps].
+    low, steps : ndarray, shape (ndim,)
+        The lattice's first coordinates and steps [joint units].
+    shape : ndarray of int, shape (ndim,)
+        The lattice's points per axis; indices are clipped to it.
+    periodic : ndarray of bool, shape (ndim,), optional
+        The axes along which indices wrap instead.
+
+    Returns
+    -------
+    ndarray of int64, shape (m, ndim)
+    """
     periodic = np.zeros(len(shape), bool) if periodic is None else periodic
     here = (np.asarray(point, dtype=float) - low) / steps
     first = np.floor(here - radius).astype(np.int64) - 1
@@ -567,9 +587,30 @@ def _box_points(point, radius, low, steps, shape, periodic=None):
     return np.stack([m.ravel() for m in np.meshgrid(*axes, indexing="ij")], axis=-1)
 
 
-def _within_box(cells, coordinates, point, radius, steps, periods=None):
-    """The cells whose coordinates lie within ``radius`` steps of ``point``
-    on every axis (across the seams of axes with a period), ascending."""
+def within_box(cells, coordinates, point, radius, steps, periods=None):
+    """The cells whose coordinates lie within ``radius`` steps of a point on
+    every axis, across the seams of axes with a period.
+
+    Parameters
+    ----------
+    cells : ndarray of int, shape (m,)
+        Candidate cells.
+    coordinates : ndarray, shape (m, ndim)
+        Their coordinates [joint units].
+    point : array_like, shape (ndim,)
+        [joint units].
+    radius : float
+        Half the box's side [steps].
+    steps : sequence of float, length ndim
+        The step of each axis [joint units].
+    periods : array_like, shape (ndim,), optional
+        Each axis' period [joint units], 0 where it has none.
+
+    Returns
+    -------
+    ndarray of int, shape (k,)
+        Ascending.
+    """
     offset = coordinates - point
     if periods is not None:
         offset = _shortest(offset, periods)

@@ -10,7 +10,7 @@ from time import perf_counter
 
 import networkx as nx
 
-from ._progress import part
+from .progress import part
 from .field import compute_field
 from .segmentation import segment
 

@@ -60,7 +60,7 @@ import scipy.sparse as sparse
 from scipy.sparse.csgraph import breadth_first_order
 
 from ..exceptions import InvalidInputError
-from ._progress import part
+from .progress import part
 from .components import connected_labels
 from .continuity import match_solutions
 from .rotary_disk import passage_from_links, rotary_disk_search

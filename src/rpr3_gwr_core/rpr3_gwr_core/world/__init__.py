@@ -1,18 +1,20 @@
 """The world around a mechanism: its bodies, a scene of obstacles and
 limits, the collision kernel, and the roadmap restricted to a scene.
 
-Names are loaded on first use (PEP 562): the mechanisms import
-:mod:`.bodies`, and :mod:`.collision` imports the mechanisms' continuation.
+Names are loaded on first use (PEP 562): :mod:`.collision` imports the
+mechanisms' continuation, which a process reading a body model alone does
+not need.
 """
 
-from .._lazy import lazy_exports
+from ..lazy import lazy_exports
 
 _SOURCES = {
-    ".bodies": ("Bodies", "BodyModel", "assemble_bodies", "body_model_from_dict"),
+    ".bodies": ("Bodies", "BodyModel", "assemble_bodies", "body_model_from_dict",
+                "mechanism_bodies"),
     ".collision": ("Collision", "SceneArrays", "check_bodies", "compile_scene",
                    "configuration_collision", "path_collisions"),
     ".scene": ("EMPTY_SCENE", "DiscObstacle", "Limits", "PolygonObstacle", "Scene",
-               "load_scene", "scene_from_dict"),
+               "scene_from_dict"),
     ".scene_roadmap": ("SceneFeasibility", "SceneRoadmap", "WorldIndex", "scene_roadmap"),
 }
 _SOURCE_OF = {name: module for module, names in _SOURCES.items() for name in names}

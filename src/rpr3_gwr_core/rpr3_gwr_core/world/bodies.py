@@ -23,9 +23,10 @@ import numbers
 import numpy as np
 
 from ..exceptions import InvalidInputError
+from ..mechanisms.base import finite_vectors
 
 __all__ = ["BodyModel", "Bodies", "assemble_bodies", "body_model_from_dict",
-           "DEFAULT_LEG_WIDTH"]
+           "mechanism_bodies", "DEFAULT_LEG_WIDTH"]
 
 # Default leg width as a fraction of the mechanism's scale: 0.42 for the
 # paper's 3-RPR (scale 20.84), thick enough that its coplanar legs interfere
@@ -146,6 +147,40 @@ passive_names : tuple of str
 legs : tuple of int
     The leg (from 0) each body belongs to, -1 for the platform.
 """
+
+
+def mechanism_bodies(mechanism, poses, joints, model=None):
+    """The moving bodies of a mechanism's configurations as capsules and polygons.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        Outlines its bodies (:meth:`~rpr3_gwr_core.mechanisms.base.Mechanism.body_outline`).
+    poses : array_like, shape (..., pose_size)
+    joints : array_like, shape (..., n_joints)
+        The joints the poses solve, broadcast against ``poses``.
+    model : BodyModel, optional
+        Widths and layers; the default puts each leg in a layer of its own.
+
+    Returns
+    -------
+    Bodies
+        Batch shape the broadcast of the two leading shapes.
+
+    Raises
+    ------
+    InvalidInputError
+        If poses or joints are not finite or of the wrong size, or the
+        model's layers do not fit the legs.
+    NotImplementedError
+        For mechanisms that do not describe their bodies.
+    """
+    poses = finite_vectors(poses, "poses", mechanism.pose_size)
+    joints = finite_vectors(joints, "joints", mechanism.n_joints)
+    shape = np.broadcast_shapes(poses.shape[:-1], joints.shape[:-1])
+    poses = np.broadcast_to(poses, shape + poses.shape[-1:])
+    joints = np.broadcast_to(joints, shape + joints.shape[-1:])
+    return assemble_bodies(mechanism.body_outline(poses, joints), model, mechanism.scale)
 
 
 def assemble_bodies(outline, model, scale):

@@ -20,6 +20,7 @@ import numpy as np
 from ..exceptions import InvalidInputError
 from ..mechanisms.base import finite_vectors
 from ..mechanisms.continuation import FOLLOWED as FOLLOWED_PATH, follow_path
+from .bodies import mechanism_bodies
 
 __all__ = ["SceneArrays", "Collision", "compile_scene", "check_bodies", "configuration_collision",
            "path_collisions", "FREE", "OBSTACLE", "INTERFERENCE", "STROKE", "PASSIVE"]
@@ -197,7 +198,7 @@ def configuration_collision(mechanism, scene, joints, pose, model=None):
     InvalidInputError
         If joints or pose are malformed, or the scene names unknown limits.
     """
-    bodies = mechanism.bodies(np.asarray(pose, dtype=float)[None],
+    bodies = mechanism_bodies(mechanism, np.asarray(pose, dtype=float)[None],
                               np.asarray(joints, dtype=float)[None], model)
     arrays = compile_scene(scene, mechanism, bodies)
     joints = np.asarray(joints, dtype=float)[None]
@@ -250,7 +251,7 @@ def path_collisions(mechanism, scene, joints_path, start_pose, model=None, min_s
     position = np.arange(path.shape[0], dtype=float)
     for _ in range(_REFINEMENTS):
         poses, reached = _followed(mechanism, path, pose)
-        bodies = mechanism.bodies(poses[:reached], path[:reached], model)
+        bodies = mechanism_bodies(mechanism, poses[:reached], path[:reached], model)
         points = np.concatenate([bodies.capsules.reshape(reached, -1, 2),
                                  bodies.polygons.reshape(reached, -1, 2)], axis=1)
         moves = np.linalg.norm(np.diff(points, axis=0), axis=-1).max(axis=1, initial=0.0)
@@ -269,7 +270,7 @@ def path_collisions(mechanism, scene, joints_path, start_pose, model=None, min_s
     if blocked.size == 0:
         return None
     k = int(blocked[0])
-    one = mechanism.bodies(poses[k:k + 1], path[k:k + 1], model)
+    one = mechanism_bodies(mechanism, poses[k:k + 1], path[k:k + 1], model)
     found = _explain(rows[k], mechanism, scene, one, path[k])
     return Collision(found.kind, found.body, found.other,
                      f"at waypoint {position[k]:.3f}: {found.message}", float(position[k]))

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..exceptions import InvalidInputError
 from ..workspace.components import find_root, join
+from .bodies import mechanism_bodies
 from .collision import FREE, check_bodies, compile_scene
 from .scene import EMPTY_SCENE
 
@@ -158,8 +159,8 @@ class WorldIndex:
         return moved
 
     def _bodies(self, disks):
-        return self.roadmap.mechanism.bodies(self._poses[disks],
-                                             self._joints[disks // self._width], self.model)
+        return mechanism_bodies(self.roadmap.mechanism, self._poses[disks],
+                                self._joints[disks // self._width], self.model)
 
     def apply(self, scene):
         """The roadmap restricted to a scene.

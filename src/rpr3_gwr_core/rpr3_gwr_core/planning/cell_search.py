@@ -1,5 +1,5 @@
-"""Local planning inside patches and stitching along a global path
-(paper section 3.3).
+"""The cell search: local planning inside patches and stitching along a
+global path (paper section 3.3).
 
 A move between face-adjacent cells costs its length times the mean cost of
 the two cells.  A cell costs 1, so paths are as short as the cells allow,
@@ -23,7 +23,7 @@ search from the start cell to the goal cell of the last layer then gives the
 best stitched path: it crosses exactly the gates of the global path, in
 order, and never a singular boundary or another gate.  The node graph, and
 the gate distances that guide the search for the clearances in use, are the
-roadmap's :class:`~.index.PlanningIndex`, built once; a clearance or weight
+roadmap's :class:`~.index.CellSearchIndex`, built once; a clearance or weight
 the index lacks is computed on first use and kept by the planner.  Searches
 run outside the interpreter's lock, each on work arrays of its thread, so
 requests in several threads plan at once.
@@ -42,7 +42,7 @@ from .index import COST_UNITS, LOW_MARGIN_FACTOR, patch_costs, patch_depth, patc
 from .termination import NEVER
 from ..exceptions import InfeasiblePathError, InvalidInputError, PlanningTimeoutError
 
-__all__ = ["LocalPlanner", "LocalPath", "DEFAULT_CLEARANCE_WEIGHT"]
+__all__ = ["CellSearch", "CellPath", "DEFAULT_CLEARANCE_WEIGHT"]
 
 DEFAULT_CLEARANCE_WEIGHT = 0.0
 # Clearances outside the index whose gate distances a planner keeps (a full
@@ -53,7 +53,7 @@ _KEPT_SCENES = 2
 
 
 @dataclass(frozen=True)
-class LocalPath:
+class CellPath:
     """A stitched cell path.
 
     Attributes
@@ -74,15 +74,15 @@ class LocalPath:
     cost: float
 
 
-class LocalPlanner:
-    """Cost-weighted planning on the node graph of a roadmap's patches (cells
+class CellSearch:
+    """Cost-weighted searches on the node graph of a roadmap's patches (cells
     of any dimension).
 
     Parameters
     ----------
     roadmap : Roadmap
-    index : PlanningIndex
-        The roadmap's (:meth:`~.index.PlanningIndex.build`).
+    index : CellSearchIndex
+        The roadmap's (:meth:`~.index.CellSearchIndex.build`).
     """
 
     def __init__(self, roadmap, index):
@@ -343,9 +343,9 @@ class LocalPlanner:
         guide = Guide(floor, empty, np.zeros(1, np.int64), np.zeros(1, np.int64), empty, empty)
         return source, target, np.zeros(pids.size, dtype=np.int32), guide, costed[0][0]
 
-    def plan(self, patches, start_cell, goal_cell, blocked=(), clearance=0.0,
-             clearance_weight=DEFAULT_CLEARANCE_WEIGHT, termination=NEVER, any_gates=False,
-             most_settled=None, world=None, inflation=1):
+    def search(self, patches, start_cell, goal_cell, blocked=(), clearance=0.0,
+               clearance_weight=DEFAULT_CLEARANCE_WEIGHT, termination=NEVER, any_gates=False,
+               most_settled=None, world=None, inflation=1):
         """Best cell path from a start cell to a goal cell through given patches,
         or through any.
 
@@ -388,7 +388,7 @@ class LocalPlanner:
 
         Returns
         -------
-        LocalPath
+        CellPath
 
         Raises
         ------
@@ -435,7 +435,7 @@ class LocalPlanner:
         if nodes.size == 0:
             raise InfeasiblePathError(f"no local path through patches "
                                       f"{'any' if any_gates else patches}")
-        return LocalPath(cells=graph.node_cell[nodes], patches=pids[graph.node_patch[nodes]],
+        return CellPath(cells=graph.node_cell[nodes], patches=pids[graph.node_patch[nodes]],
                          slots=self.index.node_slot[nodes], cost=cost)
 
 

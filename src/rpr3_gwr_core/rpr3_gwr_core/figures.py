@@ -26,9 +26,10 @@ from scipy import sparse
 from scipy.ndimage import distance_transform_cdt, find_objects, label as label_pieces
 from scipy.sparse.csgraph import connected_components, dijkstra
 
-from ..exceptions import InvalidInputError
-from ..workspace import aspect_groups
-from ..workspace.cusps import known_cusps
+from .exceptions import InvalidInputError
+from .workspace import aspect_groups
+from .workspace.cusps import known_cusps
+from .world.bodies import mechanism_bodies
 
 __all__ = ["field_figure", "slice_figure", "roadmap_figure", "plan_figure"]
 
@@ -562,7 +563,7 @@ def _draw_base_plane(fig, position, mechanism, track, world):
                 bbox={"boxstyle": "round", "fc": "white", "alpha": 0.8, "lw": 0})
     n = mechanism.n_joints
     ends = track.states[[0, -1]]
-    bodies = mechanism.bodies(ends[:, n:], ends[:, :n], world.index.model)
+    bodies = mechanism_bodies(mechanism, ends[:, n:], ends[:, :n], world.index.model)
     handles = [LegendPatch(**_OBSTACLE_STYLE, label="obstacle (its id)")]
     for k, (end, colour) in enumerate((("start", _START_COLOUR), ("goal", _GOAL_COLOUR))):
         for link in bodies.capsules[k]:
