@@ -15,8 +15,10 @@
 # The wheels' CMake export files name the include and site-packages
 # directories of the interpreter they were built with; they are rewritten to
 # this interpreter's (a no-op the second time).  Then colcon builds src/
-# (rpr3_gwr_msgs, rpr3_gwr_core, rpr3_gwr_nodes).  Each step is skipped when
-# a stamp shows its inputs are unchanged.
+# (rpr3_gwr_msgs, rpr3_gwr_core, rpr3_gwr_nodes) and, of control_msgs and
+# tf2_msgs, those that ROS (/opt/ros/jazzy or the wheels) does not install,
+# from standard_interfaces/.  Each step is skipped when a stamp shows its
+# inputs are unchanged.
 set -euo pipefail
 
 ws="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -178,8 +180,28 @@ if [ "$mode" = wheels ]; then
   export AMENT_PREFIX_PATH="$venv" CMAKE_PREFIX_PATH="$venv"
 fi
 
-sources="$(cd "$root" && find src -type f -not -path '*/__pycache__/*' -not -path '*/.hypothesis/*' \
-  -not -name '*.pyc' -print0 | sort -z | xargs -0 sha256sum | sha256sum | cut -c1-16)"
+# control_msgs and tf2_msgs are in every apt install of Jazzy (rosdep
+# installs them for the nodes' keys) but not among the wheels.  Where ROS
+# lacks one, the workspace builds it from its published definitions
+# (standard_interfaces/README.md); where ROS has it, the workspace neither
+# builds it nor keeps an earlier build of it, which would shadow the
+# installed one.
+if [ "$mode" = system ]; then underlay=/opt/ros/jazzy; else underlay="$venv"; fi
+base_paths=(src)
+for package in "$ws"/standard_interfaces/*/; do
+  name="$(basename "$package")"
+  if [ -e "$underlay/share/ament_index/resource_index/packages/$name" ]; then
+    log "$name: installed in $underlay, used as it is"
+    rm -rf "${colcon_base:?}/build/$name" "${colcon_base:?}/install/$name"
+  else
+    log "$name: not installed in $underlay, built from its published definitions (ros2_ws/standard_interfaces/$name)"
+    base_paths+=("standard_interfaces/$name")
+  fi
+done
+
+sources="$(cd "$root" && find src ros2_ws/standard_interfaces -type f -not -path '*/__pycache__/*' \
+  -not -path '*/.hypothesis/*' -not -name '*.pyc' -print0 | sort -z | xargs -0 sha256sum |
+  sha256sum | cut -c1-16) ${base_paths[*]}"
 build_stamp="$colcon_base/install/.rpr3-gwr-build"
 if [ "$(cat "$build_stamp" 2>/dev/null)" != "$inputs $sources" ]; then
   set +u
@@ -190,10 +212,10 @@ if [ "$(cat "$build_stamp" 2>/dev/null)" != "$inputs $sources" ]; then
   # each package stay, with the step's own time.
   step "building the workspace with colcon (the messages take a minute or two)" \
     bash -c 'cd "$1" && colcon --log-base "$3/log" build --symlink-install \
-      --base-paths src --build-base "$3/build" --install-base "$3/install" \
+      --base-paths "${@:4}" --build-base "$3/build" --install-base "$3/install" \
       --event-handlers console_cohesion- status- \
       --cmake-args -DBUILD_TESTING=OFF -DPython3_EXECUTABLE="$2/bin/python" >&2' \
-      _ "$ws" "$venv" "$colcon_base"
+      _ "$ws" "$venv" "$colcon_base" "${base_paths[@]}"
   # The packages are linked into the workspace, not installed, so nothing
   # compiled their bytecode: a process that may not write it
   # (PYTHONDONTWRITEBYTECODE) would compile every module at each start.

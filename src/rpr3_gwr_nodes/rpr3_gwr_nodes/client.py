@@ -24,49 +24,85 @@ Its subscriptions (the latched ``roadmap`` and the planner's
 ``~/current_scene``) take their messages only while one of its calls spins;
 being latched, they lose none meanwhile.  Calls are not thread-safe: make
 them from one thread at a time (several clients may call from threads of
-their own), and do not add the node to another executor.  The first request
-of each of its service clients is sent again when unanswered for 10 s: under
-load a server can answer it before it has matched the client's response
-reader, and that answer is lost.
+their own), and do not add the node to another executor.
+
+Every call survives a restart of its server.  A request reaches only the
+servers its writer has matched when it is sent: one sent to a server that
+has just been killed, before its successor was discovered, is lost, and so
+is the answer of a server that answers before it has matched the client's
+response reader.  So a call sends its request again when a server appears in
+the ROS graph that was not there when it was sent, and when a server new to
+this client leaves it unanswered for 10 s.  Every call ends within its
+timeout (:meth:`execute` at most a second after it, for a cancel), raising
+:class:`TimeoutError`, or :class:`GoalLostError` for a goal its driver no
+longer knows.
 """
 
 import collections
 import copy
+import math
+import numbers
 import time
+import uuid
 from collections.abc import Mapping
 
 from builtin_interfaces.msg import Time
+from control_msgs.action import FollowJointTrajectory
+from geometry_msgs.msg import PoseStamped
 from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rpr3_gwr_msgs.action import ExecuteTrajectory
-from rpr3_gwr_msgs.msg import Configuration, Scene, WorkspaceRoadmap
-from rpr3_gwr_msgs.srv import AssemblyModes, PlanPath, ResetDriver
+from rpr3_gwr_msgs.msg import Configuration, JointLimits, Scene, WorkspaceRoadmap
+from rpr3_gwr_msgs.srv import AssemblyModes, InverseKinematics, PlanPath, ResetDriver
 from std_msgs.msg import Header
+from trajectory_msgs.msg import JointTrajectory
+from unique_identifier_msgs.msg import UUID
 
-from .profiles import LATCHED_QOS, SERVICE_QOS
+from .conversions import duration_msg
+from .profiles import BASE_FRAME, LATCHED_QOS, SERVICE_QOS
 
-__all__ = ["PlannerClient", "GoalRejectedError", "configuration"]
+__all__ = ["PlannerClient", "GoalRejectedError", "GoalLostError", "configuration",
+           "platform_pose"]
 
 # Longest wait for one readiness probe, sent again if unanswered [s].
 _PROBE_TIMEOUT = 2.0
-# Longest wait for the answer to a service client's first request before it
-# is sent again: under load a server may answer before it has matched the
-# client's response reader (rmw_fastrtps waits 100 ms for it), and that
-# answer is lost; later requests find the match made [s].
+# Longest wait for the answer to a request sent to a server that has not
+# answered this client yet before it is sent again: under load a server may
+# answer before it has matched the client's response reader (rmw_fastrtps
+# waits 100 ms for it), and that answer is lost; later requests find the
+# match made [s].
 _FIRST_ANSWER_TIMEOUT = 10.0
-# Period of the checks while waiting for a roadmap, a readiness answer or a
-# scene echo [s].
+# Period of the checks while waiting for a roadmap, a readiness answer, a
+# scene echo, or an answer (whether a new server appeared) [s].
 _POLL_PERIOD = 0.1
 # Scene echoes kept while waiting for one.
 _ECHOES_KEPT = 100
-# Longest wait for the driver to confirm the cancel of a goal whose result
-# timed out [s].
+# Default longest wait for the driver to confirm a cancel [s].
 _CANCEL_TIMEOUT = 5.0
+# Longest wait for that confirmation once the result of the goal of
+# :meth:`PlannerClient.execute` has timed out: a dead or hung driver never
+# confirms, and the call must end about when its timeout says [s].
+_CANCEL_GRACE = 1.0
+# Where the driver serves FollowJointTrajectory, and where a ros2_control
+# joint_trajectory_controller of the usual name takes trajectories.
+_FOLLOW_ACTION = "rpr3_driver/follow_joint_trajectory"
+_TRAJECTORY_TOPIC = "/joint_trajectory_controller/joint_trajectory"
+# action_msgs/GoalStatus STATUS_UNKNOWN, the status an action server answers
+# a result request with for a goal it does not know (this package does not
+# depend on action_msgs itself).
+_STATUS_UNKNOWN = 0
 
 
 class GoalRejectedError(RuntimeError):
     """The driver rejected a trajectory when it arrived (its log says why)."""
+
+
+class GoalLostError(TimeoutError):
+    """The driver no longer knows a goal it accepted: it was restarted during
+    the execution (or the goal's result expired), and the result will never
+    come.  A :class:`TimeoutError`, as the wait for that result would have
+    ended."""
 
 
 def configuration(joints, mode):
@@ -94,6 +130,40 @@ def configuration(joints, mode):
     return Configuration(positions=[float(v) for v in joints], mode=float(mode))
 
 
+def platform_pose(x, y, alpha=0.0):
+    """A platform pose as plan requests take it: a geometry_msgs/PoseStamped
+    in frame ``base``.
+
+    Parameters
+    ----------
+    x, y : float
+        The platform's point (B1 of the 3-RPR, the 3-RRR and the 3-PRR; the
+        five-bar's end point P) [length unit].
+    alpha : float
+        The platform's angle [rad]; 0 for the five-bar, whose pose has none.
+
+    Returns
+    -------
+    geometry_msgs.msg.PoseStamped
+    """
+    msg = PoseStamped()
+    msg.header.frame_id = BASE_FRAME
+    msg.pose.position.x, msg.pose.position.y = float(x), float(y)
+    msg.pose.orientation.z = math.sin(0.5 * float(alpha))
+    msg.pose.orientation.w = math.cos(0.5 * float(alpha))
+    return msg
+
+
+def _joint_limits(limits):
+    """JointLimits messages from ``{name: (max_velocity, max_acceleration)}``
+    or from messages."""
+    if isinstance(limits, Mapping):
+        return [JointLimits(joint_name=name, max_velocity=float(velocity),
+                            max_acceleration=float(acceleration))
+                for name, (velocity, acceleration) in limits.items()]
+    return list(limits)
+
+
 def _as_configuration(value):
     """A Configuration message as is, or ``(joints, mode)`` through
     :func:`configuration`."""
@@ -117,7 +187,8 @@ class PlannerClient(Node):
 
     The node creates its clients and subscriptions here and waits for
     nothing: :meth:`wait_until_ready` waits for the planner, and every call
-    waits at most its ``timeout_sec``.
+    waits at most its ``timeout_sec`` (a ``ValueError`` when it is negative
+    or NaN).
 
     Parameters
     ----------
@@ -145,8 +216,8 @@ class PlannerClient(Node):
         # The planner's latest echoes: the one set_scene waits for may come
         # after others (a scene publisher's, another client's).
         self._scene_echoes = collections.deque(maxlen=_ECHOES_KEPT)
-        # The service clients that have had an answer.
-        self._answered = set()
+        # By request topic: the servers its last answered request was sent to.
+        self._answered = {}
         self._roadmap_sub = self.create_subscription(WorkspaceRoadmap, "roadmap",
                                                      self._on_roadmap, LATCHED_QOS)
         self._scene_pub = self.create_publisher(Scene, "scene", LATCHED_QOS)
@@ -157,9 +228,15 @@ class PlannerClient(Node):
         self._plan_client = self.create_client(PlanPath, "plan_path", qos_profile=SERVICE_QOS)
         self._modes_client = self.create_client(AssemblyModes, "assembly_modes",
                                                 qos_profile=SERVICE_QOS)
+        self._ik_client = self.create_client(InverseKinematics, "inverse_kinematics",
+                                             qos_profile=SERVICE_QOS)
         self._reset_client = self.create_client(ResetDriver, "reset")
         self._action_client = ActionClient(self, ExecuteTrajectory, "execute_trajectory")
         self._action_name = self.resolve_service_name("execute_trajectory")
+        # Made on a first use: by action name, (client, resolved name).
+        self._follow_clients = {}
+        # By topic.
+        self._trajectory_pubs = {}
 
     @property
     def roadmap(self):
@@ -202,7 +279,7 @@ class PlannerClient(Node):
             planner did not take the roadmap within ``timeout_sec``; the
             message says which.
         """
-        deadline = time.monotonic() + timeout_sec
+        deadline = _deadline(timeout_sec)
         topic = self._roadmap_sub.topic_name
         after = "" if newer_than is None else f" stamped after {_seconds(newer_than):.9f}"
 
@@ -243,16 +320,23 @@ class PlannerClient(Node):
                     "another mechanism_file ignores it, see its log")
             self._spin_until(lambda: False, time.monotonic() + _POLL_PERIOD)
 
-    def plan(self, start, goal, *, mode_tolerance=0.0, smooth=True, weighted=False,
-             feasibility_only=False, max_velocity=0.0, max_acceleration=0.0, time_limit=0.0,
+    def plan(self, start, goal, *, start_working_mode="", goal_working_mode="",
+             mode_tolerance=0.0, smooth=True, weighted=False, feasibility_only=False,
+             max_velocity=0.0, max_acceleration=0.0, joint_limits=(), time_limit=0.0,
              timeout_sec=60.0):
         """Ask the planner for a trajectory from ``start`` to ``goal``.
 
         Parameters
         ----------
-        start, goal : rpr3_gwr_msgs.msg.Configuration or (joints, mode)
-            The configurations, as messages or as the arguments of
-            :func:`configuration`.
+        start, goal : Configuration, (joints, mode) or geometry_msgs.msg.PoseStamped
+            The configurations, as rpr3_gwr_msgs messages or as the arguments of
+            :func:`configuration`, or the platform's poses
+            (:func:`platform_pose`).
+        start_working_mode, goal_working_mode : str
+            For an end given as a pose, its working mode, one sign per leg
+            (``"+-+"``, as :meth:`inverse_kinematics` gives them); "" lets
+            the planner take the one joined to the other end with the
+            largest margin.
         mode_tolerance : float
             Tolerance on their mode coordinates, 0 for the core's default
             [rad, or length unit].
@@ -266,6 +350,10 @@ class PlannerClient(Node):
             Joint speed [joint unit/s] and acceleration [joint unit/s^2]
             limits; both 0 take the planner's defaults, one alone is an
             ``ERROR_INVALID_INPUT``.
+        joint_limits : mapping or sequence of rpr3_gwr_msgs.msg.JointLimits
+            Limits of single joints, ``{name: (max_velocity,
+            max_acceleration)}`` or messages; a nonzero value replaces the
+            one for all joints [joint unit/s, joint unit/s^2].
         time_limit : float
             Longest planning time, 0 for the planner's
             ``default_time_limit`` [s].
@@ -287,11 +375,45 @@ class PlannerClient(Node):
             ``timeout_sec``.
         """
         request = PlanPath.Request(
-            start=_as_configuration(start), goal=_as_configuration(goal),
             mode_tolerance=float(mode_tolerance), smooth=smooth, weighted=weighted,
             feasibility_only=feasibility_only, max_velocity=float(max_velocity),
-            max_acceleration=float(max_acceleration), time_limit=float(time_limit))
+            max_acceleration=float(max_acceleration), joint_limits=_joint_limits(joint_limits),
+            time_limit=float(time_limit))
+        for end, given, mode in (("start", start, start_working_mode),
+                                 ("goal", goal, goal_working_mode)):
+            # A working mode of an end that is no pose is the planner's to refuse.
+            setattr(request, f"{end}_working_mode", mode)
+            if isinstance(given, PoseStamped):
+                setattr(request, f"{end}_is_pose", True)
+                setattr(request, f"{end}_pose", given)
+            else:
+                setattr(request, end, _as_configuration(given))
         return self._call(self._plan_client, request, timeout_sec)
+
+    def inverse_kinematics(self, pose, timeout_sec=60.0):
+        """Ask the planner for every working mode of a platform pose.
+
+        Parameters
+        ----------
+        pose : geometry_msgs.msg.PoseStamped
+            The platform's pose in frame ``base`` (:func:`platform_pose`).
+        timeout_sec : float
+            Longest wait for the answer, the service's included [s].
+
+        Returns
+        -------
+        rpr3_gwr_msgs.srv.InverseKinematics.Response
+            ``success``, ``error_code``, ``error_msg`` and the ``modes``
+            (``rpr3_gwr_msgs/WorkingMode``: its signs, configuration, aspect,
+            margin, and where it lies on the roadmap).
+
+        Raises
+        ------
+        TimeoutError
+            If the service is not there or does not answer within
+            ``timeout_sec``.
+        """
+        return self._call(self._ik_client, InverseKinematics.Request(pose=pose), timeout_sec)
 
     def assembly_modes(self, joints, start_mode=None, *, mode_tolerance=0.0,
                        timeout_sec=60.0):
@@ -382,14 +504,9 @@ class PlannerClient(Node):
             If the action server is not there or does not answer within
             ``timeout_sec``.
         """
-        deadline = time.monotonic() + timeout_sec
-        name = self._action_name
-        if not self._action_client.wait_for_server(timeout_sec=timeout_sec):
-            raise TimeoutError(f"no {name} action server within {timeout_sec:g} s: is the "
-                               "driver running?")
-        future = self._action_client.send_goal_async(
-            ExecuteTrajectory.Goal(trajectory=trajectory), feedback_callback=feedback_callback)
-        return self.wait_for(future, _left(deadline), what=f"the acceptance of a goal on {name}")
+        return self._send_goal(self._action_client, self._action_name,
+                               ExecuteTrajectory.Goal(trajectory=trajectory), feedback_callback,
+                               timeout_sec, hint=": is the driver running?")
 
     def get_result(self, handle, timeout_sec=120.0):
         """Wait for the result of an accepted goal.
@@ -410,10 +527,13 @@ class PlannerClient(Node):
 
         Raises
         ------
+        GoalLostError
+            If the driver does not know the goal: it was restarted since it
+            accepted the goal.
         TimeoutError
             If the result does not come within ``timeout_sec``.
         """
-        return self.wait_for(handle.get_result_async(), timeout_sec, what="the goal's result")
+        return self._get_result(self._action_client, self._action_name, handle, timeout_sec)
 
     def cancel(self, handle, timeout_sec=_CANCEL_TIMEOUT):
         """Cancel a goal.
@@ -435,7 +555,7 @@ class PlannerClient(Node):
         TimeoutError
             If the driver does not answer within ``timeout_sec``.
         """
-        return self.wait_for(handle.cancel_goal_async(), timeout_sec, what="a cancel")
+        return self._cancel(self._action_client, self._action_name, handle, timeout_sec)
 
     def execute(self, trajectory, feedback_callback=None, timeout_sec=120.0):
         """Execute a trajectory on the driver and wait for its end.
@@ -465,19 +585,163 @@ class PlannerClient(Node):
         ------
         GoalRejectedError
             If the driver rejects the trajectory when it arrives.
+        GoalLostError
+            If the driver was restarted during the execution.
         TimeoutError
             If it is not accepted or has not ended within ``timeout_sec``;
-            the goal is then canceled.
+            the goal is then canceled, the confirmation awaited a second at
+            most.
         """
-        deadline = time.monotonic() + timeout_sec
-        handle = self.send_goal(trajectory, feedback_callback, timeout_sec)
+        return self._execute(self._action_client, self._action_name,
+                             ExecuteTrajectory.Goal(trajectory=trajectory), feedback_callback,
+                             timeout_sec, hint=": is the driver running?")
+
+    def follow_joint_trajectory(self, trajectory, action_name=_FOLLOW_ACTION, *,
+                                path_tolerance=(), goal_tolerance=(), goal_time_tolerance=0.0,
+                                feedback_callback=None, timeout_sec=120.0):
+        """Execute a trajectory on any ``control_msgs/action/FollowJointTrajectory``
+        server (a ros2_control joint_trajectory_controller's, MoveIt's
+        execution's, the suite's driver's) and wait for its end, the
+        server's feedback relayed.
+
+        Parameters
+        ----------
+        trajectory : trajectory_msgs.msg.JointTrajectory
+            The trajectory (a plan's ``trajectory``).
+        action_name : str
+            The server's action, relative names in this client's namespace:
+            ``/joint_trajectory_controller/follow_joint_trajectory`` for a
+            controller of that name; by default the driver's.
+        path_tolerance, goal_tolerance : sequence of control_msgs.msg.JointTolerance
+            Passed on in the goal.
+        goal_time_tolerance : float
+            Passed on in the goal [s]; 0 for the server's default (an
+            ``InvalidInputError`` when negative or not finite).
+        feedback_callback : callable, optional
+            Called with each ``FollowJointTrajectory.Impl.FeedbackMessage``
+            (its ``feedback``: desired, actual and error points) while this
+            client spins, in the thread of the call spinning it.
+        timeout_sec : float
+            Longest wait for the acceptance and the end of the execution [s].
+
+        Returns
+        -------
+        control_msgs.action.FollowJointTrajectory.Impl.GetResultService.Response
+            Its ``status`` (``action_msgs.msg.GoalStatus``) and ``result``
+            (``error_code``: ``SUCCESSFUL``, ``PATH_TOLERANCE_VIOLATED``, ...,
+            and ``error_string``).
+
+        Raises
+        ------
+        GoalRejectedError
+            If the server rejects the goal (joint_trajectory_controller logs
+            why).
+        GoalLostError
+            If the server was restarted during the execution.
+        TimeoutError
+            If it is not accepted or has not ended within ``timeout_sec``;
+            the goal is then canceled, the confirmation awaited a second at
+            most.
+        """
+        client, name = self._follow_client(action_name)
+        goal = FollowJointTrajectory.Goal(
+            trajectory=trajectory, path_tolerance=list(path_tolerance),
+            goal_tolerance=list(goal_tolerance),
+            goal_time_tolerance=duration_msg(goal_time_tolerance))
+        return self._execute(client, name, goal, feedback_callback, timeout_sec)
+
+    def publish_trajectory(self, trajectory, topic=_TRAJECTORY_TOPIC, timeout_sec=10.0):
+        """Publish a trajectory on a controller's ``~/joint_trajectory`` topic
+        (trajectory_msgs only: no result, no feedback), once a subscriber is
+        there.
+
+        Parameters
+        ----------
+        trajectory : trajectory_msgs.msg.JointTrajectory
+        topic : str
+            The topic, relative names in this client's namespace; by default
+            ``/joint_trajectory_controller/joint_trajectory``.
+        timeout_sec : float
+            Longest wait for a subscriber [s].
+
+        Returns
+        -------
+        int
+            The subscribers it was published to.
+
+        Raises
+        ------
+        TimeoutError
+            If no subscriber came within ``timeout_sec``.
+        """
+        deadline = _deadline(timeout_sec)
+        publisher = self._trajectory_pubs.get(topic)
+        if publisher is None:
+            publisher = self._trajectory_pubs[topic] = self.create_publisher(
+                JointTrajectory, topic, 10)
+        if not self._spin_until(lambda: publisher.get_subscription_count() > 0, deadline):
+            raise TimeoutError(f"no subscriber of {publisher.topic_name} within "
+                               f"{timeout_sec:.3g} s")
+        publisher.publish(trajectory)
+        return publisher.get_subscription_count()
+
+    def _follow_client(self, action_name):
+        """The action client of a FollowJointTrajectory server, made once, and
+        its resolved name."""
+        if action_name not in self._follow_clients:
+            self._follow_clients[action_name] = (
+                ActionClient(self, FollowJointTrajectory, action_name),
+                self.resolve_service_name(action_name))
+        return self._follow_clients[action_name]
+
+    def _send_goal(self, client, name, goal, feedback_callback, timeout_sec, hint=""):
+        # One goal id for every copy sent: the server rejects a copy of a goal
+        # it has (rclpy's ActionServer), so a copy never executes it twice.
+        goal_id = UUID(uuid=list(uuid.uuid4().bytes))
+        return self._request(
+            lambda: client.send_goal_async(goal, feedback_callback=feedback_callback,
+                                           goal_uuid=goal_id),
+            f"{name}/_action/send_goal", client.server_is_ready, timeout_sec,
+            absent=f"no {name} action server", hint=hint,
+            what=f"the acceptance of a goal on {name}")
+
+    def _get_result(self, client, name, handle, timeout_sec):
+        # rclpy drops a goal's feedback callback with its result requests:
+        # kept, a timed out wait leaves the feedback coming.
+        response = self._request(
+            handle.get_result_async, f"{name}/_action/get_result", client.server_is_ready,
+            timeout_sec, absent=f"no {name} action server", what="the goal's result",
+            keep_unanswered=True)
+        if response.status == _STATUS_UNKNOWN:
+            raise GoalLostError(f"the server of {name} does not know the goal: it was "
+                                "restarted during the execution")
+        return response
+
+    def _cancel(self, client, name, handle, timeout_sec):
+        return self._request(
+            handle.cancel_goal_async, f"{name}/_action/cancel_goal", client.server_is_ready,
+            timeout_sec, absent=f"no {name} action server", what="answer to a cancel")
+
+    def _execute(self, client, name, goal, feedback_callback, timeout_sec, hint=""):
+        """Send ``goal`` and wait for its result (see :meth:`execute`)."""
+        deadline = _deadline(timeout_sec)
+        handle = self._send_goal(client, name, goal, feedback_callback, timeout_sec, hint)
         if not handle.accepted:
-            raise GoalRejectedError(f"the driver rejected the trajectory on "
-                                    f"{self._action_name}; its log says why")
+            raise GoalRejectedError(f"the server of {name} rejected the goal; its log says "
+                                    "why")
         try:
-            return self.get_result(handle, _left(deadline))
+            return self._get_result(client, name, handle, _left(deadline))
+        except GoalLostError:
+            raise
         except TimeoutError:
-            self.cancel(handle)
+            # A dead or hung server never confirms: the timeout is reported
+            # without waiting longer for it, and the cancel's own timeout
+            # must not replace it.
+            try:
+                self._cancel(client, name, handle, _CANCEL_GRACE)
+            except TimeoutError as unconfirmed:
+                self.get_logger().warning(f"the goal whose result timed out may still run: "
+                                          f"{unconfirmed}")
             raise
 
     def set_scene(self, scene, *, wait=True, timeout_sec=30.0):
@@ -516,7 +780,7 @@ class PlannerClient(Node):
         self._scene_pub.publish(scene)
         if wait and not self._spin_until(
                 lambda: any(e.header.stamp == stamp for e in self._scene_echoes),
-                time.monotonic() + timeout_sec):
+                _deadline(timeout_sec)):
             raise TimeoutError(f"the planner did not echo the scene on "
                                f"{self._echo_sub.topic_name} within {timeout_sec:g} s: it "
                                "refused it (its log says why) or has no roadmap yet")
@@ -544,7 +808,8 @@ class PlannerClient(Node):
         TimeoutError
             If it is not done within ``timeout_sec``.
         """
-        self._executor.spin_until_future_complete(future, timeout_sec=max(timeout_sec, 0.0))
+        self._executor.spin_until_future_complete(future,
+                                                  timeout_sec=_left(_deadline(timeout_sec)))
         if not future.done():
             raise TimeoutError(f"no {what} within {timeout_sec:g} s")
         return future.result()
@@ -557,25 +822,91 @@ class PlannerClient(Node):
         super().destroy_node()
 
     def _call(self, client, request, timeout_sec):
-        """Call a service within ``timeout_sec``, waiting for it too; the
-        client's first request is sent again if unanswered, and a request
-        unanswered in time is dropped."""
-        deadline = time.monotonic() + timeout_sec
+        """Call a service within ``timeout_sec``, waiting for it too (see
+        :meth:`_request`)."""
         name = self.resolve_service_name(client.srv_name)
-        if not client.wait_for_service(timeout_sec=timeout_sec):
-            raise TimeoutError(f"no {name} service within {timeout_sec:g} s")
-        while True:
-            attempt = _left(deadline)
-            if client not in self._answered:
-                attempt = min(attempt, _FIRST_ANSWER_TIMEOUT)
-            future = client.call_async(request)
-            self._executor.spin_until_future_complete(future, timeout_sec=attempt)
-            if future.done():
-                self._answered.add(client)
-                return future.result()
-            client.remove_pending_request(future)
-            if _left(deadline) <= 0.0:
-                raise TimeoutError(f"no answer from {name} within {timeout_sec:g} s")
+        return self._request(lambda: client.call_async(request), name, client.service_is_ready,
+                             timeout_sec, absent=f"no {name} service",
+                             what=f"answer from {name}")
+
+    def _request(self, send, service, ready, timeout_sec, *, absent, what, hint="",
+                 keep_unanswered=False):
+        """Send a request once a server is there and spin until it is
+        answered, sending it again to any server that may have missed it.
+
+        Parameters
+        ----------
+        send : callable
+            Sends the request; returns its ``rclpy.task.Future``.
+        service : str
+            The fully qualified name of the service that takes it (an
+            action's ``<name>/_action/get_result`` for instance).
+        ready : callable
+            Whether a server is there (``Client.service_is_ready``,
+            ``ActionClient.server_is_ready``).
+        timeout_sec : float
+            Longest wait for the server and the answer [s].
+        absent, what, hint : str
+            The error messages: "``absent`` within ... s``hint``" when no
+            server came, "no ``what`` within ... s" when none answered.
+        keep_unanswered : bool
+            Leave the requests pending when none was answered, instead of
+            dropping them.
+
+        Returns
+        -------
+        object
+            The first answer to one of the copies sent; the others are
+            dropped.
+
+        Raises
+        ------
+        TimeoutError
+            If no server came or none answered within ``timeout_sec``.
+        """
+        deadline = _deadline(timeout_sec)
+        if not self._spin_until(ready, deadline):
+            raise TimeoutError(f"{absent} within {timeout_sec:.3g} s{hint}")
+        # The graph knows a service's servers as the readers of its request
+        # topic, which the DDS rmws name so.
+        topic = f"rq{service}Request"
+        futures = []
+        try:
+            while True:
+                servers = self._servers(topic)
+                futures.append(send())
+                sent = time.monotonic()
+                answered = self._answered.get(topic)
+                resend = (sent + _FIRST_ANSWER_TIMEOUT
+                          if answered is None or not servers <= answered else deadline)
+                while True:
+                    done = next((f for f in futures if f.done()), None)
+                    if done is not None:
+                        self._answered[topic] = servers
+                        return done.result()
+                    left = _left(deadline)
+                    if left <= 0.0:
+                        raise TimeoutError(f"no {what} within {timeout_sec:.3g} s")
+                    self._executor.spin_once(timeout_sec=min(left, _POLL_PERIOD))
+                    # A server discovered after the request was sent was
+                    # matched after it too and never got it (a restarted
+                    # driver); none that is not ready yet could take it.
+                    if ((self._servers(topic) - servers or time.monotonic() >= resend)
+                            and ready()):
+                        self.get_logger().debug(
+                            f"sending again, {time.monotonic() - sent:.3f} s after it, a "
+                            f"request to {service} ({len(futures)} sent)")
+                        break
+        finally:
+            if not keep_unanswered or any(f.done() for f in futures):
+                for future in futures:
+                    future.cancel()
+
+    def _servers(self, topic):
+        """The endpoint ids of the readers of ``topic`` (a DDS topic name) in
+        the ROS graph: the servers of a service by its request topic."""
+        return frozenset(bytes(info.endpoint_gid) for info in
+                         self.get_subscriptions_info_by_topic(topic, no_mangle=True))
 
     def _spin_until(self, condition, deadline):
         """Spin until ``condition()`` holds or the monotonic ``deadline``
@@ -586,6 +917,21 @@ class PlannerClient(Node):
                 return False
             self._executor.spin_once(timeout_sec=min(left, _POLL_PERIOD))
         return True
+
+
+def _deadline(timeout_sec):
+    """The monotonic time ``timeout_sec`` from now.
+
+    Raises
+    ------
+    ValueError
+        If ``timeout_sec`` is not a number of seconds: negative or NaN
+        (infinite waits for ever).
+    """
+    if isinstance(timeout_sec, bool) or not isinstance(timeout_sec, numbers.Real) \
+            or not timeout_sec >= 0.0:
+        raise ValueError(f"timeout_sec is a non-negative number of seconds, got {timeout_sec!r}")
+    return time.monotonic() + timeout_sec
 
 
 def _left(deadline):

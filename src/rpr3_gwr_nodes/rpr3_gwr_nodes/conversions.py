@@ -17,7 +17,8 @@ import math
 
 import numpy as np
 from builtin_interfaces.msg import Duration
-from geometry_msgs.msg import Point, Point32, Polygon
+from geometry_msgs.msg import Point, Point32, Polygon, PoseStamped
+from rclpy.serialization import deserialize_message
 from rpr3_gwr_core.exceptions import InvalidInputError
 from rpr3_gwr_core.mechanisms import mechanism_from_dict
 from rpr3_gwr_core.world import scene_from_dict
@@ -37,12 +38,26 @@ from rpr3_gwr_msgs.msg import WorkspacePatch, WorkspaceRoadmap
 from .profiles import BASE_FRAME
 
 __all__ = ["MAX_DURATION", "duration_msg", "mechanism_to_msg", "mechanism_from_msg",
-           "pose_msg", "configuration_from_msg", "grid_to_msg", "grid_from_msg",
+           "pose_msg", "pose_from_msg", "pose_stamped_msg", "configuration_from_msg",
+           "grid_to_msg", "grid_from_msg",
            "roadmap_to_msgs", "roadmap_from_msgs", "roadmap_matches_msgs", "scene_to_msg",
-           "scene_from_msg", "is_empty_scene"]
+           "scene_from_msg", "scene_msg_from_bytes", "is_empty_scene",
+           "MAX_SCENE_MESSAGE_BYTES"]
 
 # builtin_interfaces/Duration holds int32 seconds.
 MAX_DURATION = 2**31 - 1
+# How far a pose's quaternion may be from unit length, or from a turn about
+# z (a float32 quaternion rounded to float64 is within 1e-7).
+_UNIT_QUATERNION_TOL = 1e-6
+
+MAX_SCENE_MESSAGE_BYTES = 128 * 1024
+"""Longest serialized rpr3_gwr_msgs/Scene the nodes read [bytes] (128 KiB).
+
+Reading a message takes time in proportion to its obstacles (10,000 discs,
+560 KB: 0.15 s of the interpreter), spent before the core can refuse more
+than a scene may hold (:data:`~rpr3_gwr_core.world.scene.MAX_OBSTACLES`):
+a longer one is refused unread.  The largest scene the core takes, with ids
+of a few characters, is about 17 KB."""
 
 
 def duration_msg(seconds):
@@ -115,6 +130,55 @@ def mechanism_from_msg(msg):
 def pose_msg(mechanism, pose):
     """A pose (shape ``(pose_size,)``) as a rpr3_gwr_msgs/PlatformPose."""
     return PlatformPose(names=list(mechanism.pose_names), values=[float(v) for v in pose])
+
+
+def pose_from_msg(mechanism, msg):
+    """A geometry_msgs/PoseStamped of the platform as the core's pose
+    (``(x, y, alpha)``, or the five-bar's ``(x, y)``).
+
+    Raises
+    ------
+    InvalidInputError
+        If it is not a pose in the base plane: a number not finite, a frame
+        other than ``base`` (or ""), z not 0, a quaternion not of unit length
+        (within 1e-6) or turning about another axis than z, or turned at all
+        for a mechanism whose pose has no angle.
+    """
+    frame = msg.header.frame_id
+    if frame not in ("", BASE_FRAME):
+        raise InvalidInputError(f"a pose is in frame {BASE_FRAME!r} (or \"\"), got {frame!r:.60}")
+    p, q = msg.pose.position, msg.pose.orientation
+    values = (p.x, p.y, p.z, q.x, q.y, q.z, q.w)
+    if not all(math.isfinite(v) for v in values):
+        raise InvalidInputError(f"a pose's numbers must be finite, got {values}")
+    if p.z != 0.0:
+        raise InvalidInputError(f"a pose lies in the base plane: z must be 0, got {p.z}")
+    if abs(math.hypot(q.x, q.y, q.z, q.w) - 1.0) > _UNIT_QUATERNION_TOL:
+        raise InvalidInputError(f"a pose's orientation must be a unit quaternion, got "
+                                f"{(q.x, q.y, q.z, q.w)}")
+    if max(abs(q.x), abs(q.y)) > _UNIT_QUATERNION_TOL:
+        raise InvalidInputError(f"a pose turns about z only: its quaternion's x and y must be "
+                                f"0, got {(q.x, q.y)}")
+    yaw = 2.0 * math.atan2(q.z, q.w)
+    if not any(mechanism.angular[2:]):
+        if abs(math.remainder(yaw, 2 * math.pi)) > _UNIT_QUATERNION_TOL:
+            raise InvalidInputError(f"the {mechanism.kind}'s pose has no angle: its "
+                                    f"orientation must be the identity, got {yaw:g} rad")
+        return (p.x, p.y)
+    return (p.x, p.y, math.remainder(yaw, 2 * math.pi))
+
+
+def pose_stamped_msg(mechanism, pose, stamp=None):
+    """The core's pose (shape ``(pose_size,)``) as a geometry_msgs/PoseStamped
+    in frame ``base`` (``stamp`` a builtin_interfaces/Time, zero if None)."""
+    yaw = float(pose[2]) if len(pose) > 2 and mechanism.angular[2] else 0.0
+    msg = PoseStamped()
+    msg.header.frame_id = BASE_FRAME
+    if stamp is not None:
+        msg.header.stamp = stamp
+    msg.pose.position.x, msg.pose.position.y = float(pose[0]), float(pose[1])
+    msg.pose.orientation.z, msg.pose.orientation.w = math.sin(0.5 * yaw), math.cos(0.5 * yaw)
+    return msg
 
 
 def configuration_from_msg(mechanism, msg):
@@ -336,6 +400,20 @@ def scene_to_msg(scene, header):
 def _joint_ranges(ranges):
     return [JointRange(name=name, min=float(low), max=float(high))
             for name, (low, high) in ranges.items()]
+
+
+def scene_msg_from_bytes(data):
+    """A serialized rpr3_gwr_msgs/Scene (a raw subscription's), read.
+
+    Raises
+    ------
+    InvalidInputError
+        If it is longer than :data:`MAX_SCENE_MESSAGE_BYTES`.
+    """
+    if len(data) > MAX_SCENE_MESSAGE_BYTES:
+        raise InvalidInputError(f"scene message of {len(data):,} bytes, more than the "
+                                f"{MAX_SCENE_MESSAGE_BYTES:,} a scene may take: refused unread")
+    return deserialize_message(data, SceneMsg)
 
 
 def scene_from_msg(msg):

@@ -48,8 +48,9 @@ def home_source(described):
     """Where a mechanism file's default home comes from, for the log."""
     if described.home is not None:
         return "the mechanism file's home"
-    return ("the file has no home: the assembly mode of largest margin on the slice of "
-            "its first joint with most configurations that can be assembled")
+    return ("the home found for the mechanism file, which gives none (the assembly mode of "
+            "largest margin on the slice of its first joint with most configurations that can "
+            "be assembled)")
 
 
 def kept_scene(scene, bodies):

@@ -21,6 +21,11 @@ gone (killed, without a shutdown), so they do not outlive it holding the
 roadmap's memory.  The folder is removed when the workers are closed; one
 left by a killed node is removed by the next node that starts workers.
 
+A scene is applied in every worker (:meth:`PlanWorkers.apply_scene`) before
+requests in it go to the workers; each worker keeps the latest scene it was
+given, restricted to its roadmap, and the index every scene reads for a
+body model (the costly part, computed once per worker and roadmap).
+
 Each worker has pipes of its own and is handed one request at a time: with a
 task queue shared by all of them, a worker stopped (SIGSTOP, a debugger)
 while reading it kept the queue's lock and stalled every other worker.
@@ -69,6 +74,8 @@ _BEAT_PERIOD = 0.1
 _HANG_AFTER = 2.0
 # The same while a worker starts (module doc).
 _START_HANG_AFTER = 30.0
+# The scene key of workers taking a new scene: no request matches it.
+_APPLYING = object()
 # A message's length ahead of it on a pipe, and the most read at once.
 _LENGTH = struct.Struct("<Q")
 _STAMP = struct.Struct("d")
@@ -94,7 +101,7 @@ class PlanWorkers:
     Parameters
     ----------
     roadmap : Roadmap
-    index : PlanningIndex
+    index : CellSearchIndex
         The roadmap's, with the gate distances of the clearances the node
         plans with.
     count : int
@@ -112,6 +119,8 @@ class PlanWorkers:
     ----------
     planner : Planner
         On the mapped files, warmed up: the node's own.
+    scene_key : object
+        The key of the scene the workers plan in (None: no scene).
     """
 
     def __init__(self, roadmap, index, count, timeout, directory, **planner_options):
@@ -123,6 +132,7 @@ class PlanWorkers:
         self._idle = collections.deque()
         self._closed = False
         self._count = count
+        self.scene_key = None
         os.makedirs(directory, exist_ok=True)
         _remove_orphans(directory)
         self.folder = tempfile.mkdtemp(prefix=f"planner-{os.getpid()}-", dir=directory)
@@ -152,8 +162,16 @@ class PlanWorkers:
         """Workers not killed."""
         return self._count
 
-    def plan(self, start, goal, options, termination):
+    def plan(self, start, goal, options, termination, scene_key=None):
         """``Planner.plan`` in an idle worker, once there is one.
+
+        Parameters
+        ----------
+        start, goal, options, termination
+            As :meth:`~rpr3_gwr_core.planning.Planner.plan`'s.
+        scene_key : object, optional
+            The key of the scene to plan in, last given to
+            :meth:`apply_scene` (None: no scene).
 
         Raises
         ------
@@ -165,16 +183,12 @@ class PlanWorkers:
         WorkerFailed
             When the worker hung, died, or gave no plan within ``timeout``.
         """
-        worker = self._take(termination)
-        try:
-            worker.send((start, goal, options, termination))
-            planned, answer = worker.receive(self.timeout)
-        except (OSError, EOFError, WorkerFailed) as exc:
-            self._retire(worker)
-            if isinstance(exc, WorkerFailed):
-                raise
-            raise WorkerFailed(f"plan worker {worker.pid} died") from exc
-        self._give_back(worker)
+        if scene_key != self.scene_key:
+            raise WorkersClosed("the plan workers have another scene, or are taking one")
+        planned, answer = self._ask(self._take(termination),
+                                    ("plan", scene_key, start, goal, options, termination))
+        if planned is None:
+            raise WorkersClosed("the plan workers took another scene meanwhile")
         if planned:
             return answer
         try:
@@ -184,6 +198,62 @@ class PlanWorkers:
             # reference to the error, no cycle keeps the request's planner
             # state alive until a full collection.
             del answer
+
+    def apply_scene(self, key, scene, model):
+        """Apply a scene in every worker, and plan in it from then on; until
+        every worker has it, :meth:`plan` raises ``WorkersClosed``.
+
+        Parameters
+        ----------
+        key : object
+            Names the scene for :meth:`plan` (picklable, not None).
+        scene : Scene or None
+            None: plan without a scene.
+        model : BodyModel
+            Widths and layers of the mechanism's bodies.
+
+        Raises
+        ------
+        GWRError
+            What ``Planner.apply_scene`` raises in a worker.
+        WorkersClosed
+            After :meth:`close`, or once every worker failed.
+        WorkerFailed
+            When a worker hung or died applying it.
+        """
+        self.scene_key = _APPLYING
+        # Every worker is taken, as each comes free, and they apply the
+        # scene at once: each first indexes the body model, seconds on a
+        # full roadmap.
+        taken = []
+        with self._changed:
+            while len(taken) < self._count and not self._closed:
+                if self._idle:
+                    taken.append(self._idle.popleft())
+                else:
+                    self._changed.wait()
+        if self._closed:
+            for worker in taken:
+                self._give_back(worker)
+            raise WorkersClosed("the plan workers are closed")
+        failure = None
+        for worker in taken:
+            try:
+                self._send(worker, ("scene", key, scene, model))
+            except WorkerFailed as exc:
+                failure = failure or exc
+                taken.remove(worker)
+        for worker in taken:
+            try:
+                applied, error = self._receive(worker, self.timeout, _START_HANG_AFTER)
+            except WorkerFailed as exc:
+                failure = failure or exc
+                continue
+            self._give_back(worker)
+            failure = failure or (None if applied else error)
+        if failure is not None:
+            raise failure
+        self.scene_key = key if scene is not None else None
 
     def close(self):
         """Stop the workers once the plans asked of them are done, and remove
@@ -196,6 +266,30 @@ class PlanWorkers:
         for worker in idle:
             worker.kill()
         shutil.rmtree(self.folder, ignore_errors=True)
+
+    def _ask(self, worker, message):
+        """Send a worker a message and wait for its answer; the worker goes
+        back to the idle ones, or is retired when it failed."""
+        self._send(worker, message)
+        answer = self._receive(worker, self.timeout)
+        self._give_back(worker)
+        return answer
+
+    def _send(self, worker, message):
+        try:
+            worker.send(message)
+        except OSError as exc:
+            self._retire(worker)
+            raise WorkerFailed(f"plan worker {worker.pid} died") from exc
+
+    def _receive(self, worker, timeout, hang_after=_HANG_AFTER):
+        try:
+            return worker.receive(timeout, hang_after)
+        except (OSError, EOFError, WorkerFailed) as exc:
+            self._retire(worker)
+            if isinstance(exc, WorkerFailed):
+                raise
+            raise WorkerFailed(f"plan worker {worker.pid} died") from exc
 
     def _take(self, termination):
         with self._changed:
@@ -337,6 +431,7 @@ def _serve(requests, answers, beat_file, node_process):
         beat = mmap.mmap(stream.fileno(), _STAMP.size)
     threading.Thread(target=_beat, args=(beat, node_process), daemon=True).start()
     planner = None
+    scene_key, world = None, None
     while True:
         length = _read_exactly(requests, _LENGTH.size)
         if length is None:
@@ -346,8 +441,18 @@ def _serve(requests, answers, beat_file, node_process):
             if planner is None:
                 planner = _load_planner(*message)
                 answer = True, None
+            elif message[0] == "scene":
+                _, key, scene, model = message
+                scene_key, world = None, None
+                if scene is not None:
+                    world = planner.apply_scene(scene, model)
+                    scene_key = key
+                answer = True, None
+            elif message[1] != scene_key:
+                # Sent before a newer scene came: the caller plans it.
+                answer = None, None
             else:
-                answer = True, planner.plan(*message)
+                answer = True, planner.plan(*message[2:], world=world)
         except Exception as exc:  # the caller raises it
             answer = False, exc
         _write(answers, answer)

@@ -53,12 +53,14 @@ the log and the previous one stays; one without obstacles and joint ranges
 means no scene.  The scene planned with is echoed on ``~/current_scene``
 (same QoS; its header stamp is the received one, empty when planning
 without a scene).  A start or goal that collides answers
-``ERROR_IN_COLLISION``, ends the roadmap joins and the scene does not
-``ERROR_INFEASIBLE`` with ``FEASIBILITY_BLOCKED``.  In a scene, requests are
-planned in the node's process: the workers know the roadmap and its
-planning index only.
+``ERROR_IN_COLLISION``, ends the roadmap joins and the scene does not (or
+clear ends whose grid cell the scene leaves no way out)
+``ERROR_INFEASIBLE`` with ``FEASIBILITY_BLOCKED``.  The plan workers apply
+each scene too, and plan in it once all of them have it; meanwhile its
+requests are planned in the node's process.
 """
 
+import itertools
 import math
 import os
 import threading
@@ -68,29 +70,34 @@ from numba.core import event as numba_event
 import numpy as np
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
-from rclpy.executors import MultiThreadedExecutor
+from rclpy.exceptions import ParameterException
 from rclpy.node import Node
-from rpr3_gwr_core.exceptions import GWRError, InvalidInputError
+from rpr3_gwr_core.exceptions import (GWRError, InfeasiblePathError, InvalidInputError,
+                                      PlanningTimeoutError)
 from rpr3_gwr_core.io.cache import find_cached_planning
 from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
 from rpr3_gwr_core.io.paths import default_cache_dir
-from rpr3_gwr_core.planning import (DEFAULT_CLEARANCE, PlanningIndex, PlanOptions, Planner,
-                                    Retries, Termination, assembly_modes, planning_index)
+from rpr3_gwr_core.planning import (DEFAULT_CLEARANCE, CellSearchIndex, PlanOptions, Planner,
+                                    PoseEnd, Retries, Termination, assembly_modes,
+                                    build_cell_search_index, resolve_ends, working_modes)
 from rpr3_gwr_msgs.msg import (AssemblyMode, Configuration, GlobalPath, NSolutionField,
                                PlannedPath, Scene, WorkspaceRoadmap)
-from rpr3_gwr_msgs.srv import AssemblyModes, PlanPath
+from rpr3_gwr_msgs.msg import WorkingMode as WorkingModeMsg
+from rpr3_gwr_msgs.srv import AssemblyModes, InverseKinematics, PlanPath
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from visualization_msgs.msg import MarkerArray
 
 from .conversions import (MAX_DURATION, configuration_from_msg, duration_msg, grid_from_msg,
-                          is_empty_scene, mechanism_from_msg, pose_msg, roadmap_from_msgs,
-                          roadmap_matches_msgs, scene_from_msg, scene_to_msg)
+                          is_empty_scene, mechanism_from_msg, pose_from_msg, pose_msg,
+                          roadmap_from_msgs, roadmap_matches_msgs, scene_from_msg,
+                          scene_msg_from_bytes, scene_to_msg)
 from .core_threads import core_threads
 from .mechanism_parameters import kept_scene
 from .memory import release_free_memory, use_one_arena
 from .plan_workers import PlanWorkers, WorkerFailed, WorkersClosed
 from .profiles import BASE_FRAME, LATCHED_QOS, SERVICE_QOS
+from .receipt import ReceiptExecutor, request_age
 from .spin import run
 from .visualization import path_markers
 
@@ -104,12 +111,14 @@ Plans singularity-free joint trajectories on the roadmap it receives (it
 computes none): answers ERROR_NO_ROADMAP until the first one is loaded.
 
 Subscribes  field, roadmap (the builder's, latched), scene (latched)
-Serves      plan_path (rpr3_gwr_msgs/srv/PlanPath), assembly_modes
-            (rpr3_gwr_msgs/srv/AssemblyModes)
+Serves      plan_path (rpr3_gwr_msgs/srv/PlanPath: ends as joints or as
+            platform poses), assembly_modes (rpr3_gwr_msgs/srv/AssemblyModes),
+            inverse_kinematics (rpr3_gwr_msgs/srv/InverseKinematics)
 Publishes   planned_trajectory, planned_path (with the plan's ends),
             planned_path_markers, ~/current_scene
 Parameters  clearance (0.02), default_max_velocity (1.0),
-            default_max_acceleration (2.0), default_time_limit (10.0 s),
+            default_max_acceleration (2.0), joint_limits.<joint>.max_velocity
+            and .max_acceleration (0: the defaults), default_time_limit (10.0 s),
             plan_workers (one per core, read-only), mechanism_file ('' takes
             any roadmap's mechanism, read-only), promising_nodes,
             retry_global_paths, retry_repairs, retry_split_shortcuts,
@@ -154,7 +163,7 @@ def received_roadmap(field_msg, roadmap_msg, cache_dir=None):
     Returns
     -------
     roadmap : Roadmap
-    index : PlanningIndex
+    index : CellSearchIndex
     cached : bool
         Whether they are the cache's.
 
@@ -174,7 +183,7 @@ def received_roadmap(field_msg, roadmap_msg, cache_dir=None):
     if cached is not None and roadmap_matches_msgs(cached[0], field_msg, roadmap_msg):
         return (*cached, True)
     received = roadmap_from_msgs(field_msg, roadmap_msg)
-    return received, PlanningIndex.build(received), False
+    return received, CellSearchIndex.build(received), False
 
 
 def plan_to_trajectory(plan, joint_names, header):
@@ -207,19 +216,23 @@ _CORES = os.cpu_count() or 1
 # Longest wait for a plan from a worker that is not hung [s]: the full 3-DOF
 # roadmap's slowest plans take seconds.
 _WORKER_TIMEOUT = 120.0
+# The parameter each per-joint limit falls back on.
+_JOINT_LIMIT_DEFAULTS = {"max_velocity": "default_max_velocity",
+                         "max_acceleration": "default_max_acceleration"}
 
 
 class _State:
     """A planner, the stamp of the roadmap messages it was built from, the
-    workers planning on it (None: plan in this process) and its roadmap
-    restricted to the current scene (None: no scene), swapped as one
-    reference."""
+    workers planning on it (None: plan in this process), its roadmap
+    restricted to the current scene (None: no scene) and the key that names
+    that scene to the workers, swapped as one reference."""
 
-    def __init__(self, planner, stamp, workers=None, world=None):
+    def __init__(self, planner, stamp, workers=None, world=None, scene_key=None):
         self.planner = planner
         self.stamp = stamp
         self.workers = workers
         self.world = world
+        self.scene_key = scene_key
 
 
 class PlannerNode(Node):
@@ -240,8 +253,9 @@ class PlannerNode(Node):
                         "validation, or what the start and goal allow",
             floating_point_range=[FloatingPointRange(from_value=0.0, to_value=0.5)]))
         self.declare_parameter("default_time_limit", 10.0, ParameterDescriptor(
-            description="Longest time to plan a request that gives no time_limit: past it "
-                        "the answer is the valid path found so far or ERROR_TIMEOUT [s]",
+            description="Longest time to plan a request that gives no time_limit, from its "
+                        "reception: past it the answer is the valid path found so far or "
+                        "ERROR_TIMEOUT [s]",
             floating_point_range=[FloatingPointRange(from_value=1e-3, to_value=3600.0)]))
         self.declare_parameter("plan_workers", _CORES, ParameterDescriptor(
             description="Processes that plan requests, started with each new roadmap and "
@@ -290,6 +304,8 @@ class PlannerNode(Node):
         path = self.get_parameter("mechanism_file").value
         described = load_mechanism_file(path) if path else None
         self.mechanism = None if described is None else described.mechanism
+        if self.mechanism is not None:
+            self._declare_joint_limits(self.mechanism.joint_names)
         # The widths and layers of the bodies a scene is checked with: the
         # file's, else the defaults (each leg in a layer of its own).
         self.bodies = None if described is None else described.bodies
@@ -299,6 +315,8 @@ class PlannerNode(Node):
         # came with (None: no scene).
         self._scene = None
         self._scene_stamp = None
+        # Names each scene applied, for the plan workers.
+        self._scene_keys = itertools.count(1)
         # Scene messages refused (unreadable, or not fitting the roadmap).
         self.refused_scenes = 0
         # Roadmaps and scenes are taken one at a time (they replace the
@@ -308,8 +326,9 @@ class PlannerNode(Node):
                                  callback_group=updates)
         self.create_subscription(WorkspaceRoadmap, "roadmap", self._on_roadmap, LATCHED_QOS,
                                  callback_group=updates)
+        # Raw: a message too long to be a scene is refused unread.
         self.create_subscription(Scene, "scene", self._on_scene, LATCHED_QOS,
-                                 callback_group=updates)
+                                 callback_group=updates, raw=True)
         self.scene_pub = self.create_publisher(Scene, "~/current_scene", LATCHED_QOS)
         self.trajectory_pub = self.create_publisher(JointTrajectory, "planned_trajectory", 10)
         # The same with the plan's ends: a recorded plan replays alone.
@@ -319,6 +338,9 @@ class PlannerNode(Node):
                             callback_group=ReentrantCallbackGroup())
         self.create_service(AssemblyModes, "assembly_modes", self._on_assembly_modes,
                             qos_profile=SERVICE_QOS, callback_group=ReentrantCallbackGroup())
+        self.create_service(InverseKinematics, "inverse_kinematics",
+                            self._on_inverse_kinematics, qos_profile=SERVICE_QOS,
+                            callback_group=ReentrantCallbackGroup())
         # Set once a first roadmap is planned on.
         self.ready = threading.Event()
         # Set once the latest roadmap's planning index is built and its
@@ -372,6 +394,11 @@ class PlannerNode(Node):
                 planner.warm_up()
             except Exception as exc:  # a bug there must not take the node down
                 self.get_logger().error(f"the warm-up failed: {exc!r}")
+        try:
+            self._declare_joint_limits(planner.roadmap.mechanism.joint_names)
+        except ParameterException as exc:
+            # A parameters file's value out of range: requests get the defaults.
+            self.get_logger().error(f"joint limits of the roadmap's joints: {exc}")
         world = self._world_for(planner)
         # One reference assignment: atomic for the service threads, and a
         # request keeps the state it started with.
@@ -408,9 +435,9 @@ class PlannerNode(Node):
         begin = time.perf_counter()
         roadmap = self._state.planner.roadmap
         try:
-            index = planning_index(roadmap, (self.get_parameter("clearance").value,),
+            index = build_cell_search_index(roadmap, (self.get_parameter("clearance").value,),
                                    retries=self._retries,
-                                   graph_from=self._state.planner.planning_index)
+                                   graph_from=self._state.planner.search_index)
         except Exception as exc:  # plans go on without the index
             self.get_logger().error(f"the planning index failed: {exc!r}")
             return
@@ -435,6 +462,8 @@ class PlannerNode(Node):
             self.get_logger().error(f"the scene index does not move to the indexed roadmap: "
                                     f"{exc}")
         state.world = self._world_for(state.planner)
+        if state.workers is not None and state.world is not None:
+            self._apply_in_workers(state)
         # Updates are mutually exclusive: no other roadmap came meanwhile.
         # With workers, the node's planner reads the mapped files too, and
         # the received roadmap's memory goes with the replaced state.
@@ -462,9 +491,10 @@ class PlannerNode(Node):
             self._echo_scene()
             return None
 
-    def _on_scene(self, msg):
+    def _on_scene(self, data):
         begin = time.perf_counter()
         try:
+            msg = scene_msg_from_bytes(data)
             scene = scene_from_msg(msg)
             if is_empty_scene(scene):
                 scene = None
@@ -483,13 +513,35 @@ class PlannerNode(Node):
             self.get_logger().info("keeping the scene for the first roadmap")
             return
         # Requests started before go on in the previous scene.
-        self._state = _State(state.planner, state.stamp, state.workers, world)
+        self._state = _State(state.planner, state.stamp, state.workers, world,
+                             None if world is None else next(self._scene_keys))
+        if state.workers is not None:
+            self._apply_in_workers(self._state)
         self._echo_scene()
         self.get_logger().info(
             "planning without a scene" if scene is None else
             f"planning in a new scene: {len(scene.polygons) + len(scene.discs)} obstacle(s), "
             f"{len(scene.limits.strokes)} stroke(s), {len(scene.limits.passive)} passive "
             f"range(s), ready in {time.perf_counter() - begin:.3f} s")
+
+    def _apply_in_workers(self, state):
+        """Give the state's workers its scene (or none) and its key; until
+        they all have it, its requests are planned in this process."""
+        if state.world is not None and state.scene_key is None:
+            state.scene_key = next(self._scene_keys)
+        begin = time.perf_counter()
+        try:
+            state.workers.apply_scene(state.scene_key, kept_scene(self._scene, self.bodies),
+                                      self.bodies)
+        except WorkersClosed:
+            return  # a newer roadmap came meanwhile, or every worker failed
+        except Exception as exc:  # GWRError, WorkerFailed; anything else a bug
+            self.get_logger().error(f"the plan workers could not take the scene, requests in "
+                                    f"it are planned in the node's process: {exc!r}")
+            return
+        if state.world is not None:
+            self.get_logger().info(f"plan workers planning in the scene, ready in "
+                                   f"{time.perf_counter() - begin:.3f} s")
 
     def _echo_scene(self):
         """Publish the scene planned with on ``~/current_scene``."""
@@ -501,17 +553,14 @@ class PlannerNode(Node):
     def _plan(self, state, start, goal, options, termination):
         """A plan from the state's workers, or from its planner here when it
         has none, the worker planning it failed (killed, not replaced: it
-        might fail again) or the state has a scene."""
-        if state.world is not None:
-            # The workers map the roadmap and its planning index, and know no
-            # scene: plans in a scene are made in the node's process.
-            return state.planner.plan(start, goal, options, termination, world=state.world)
+        might fail again) or the workers do not plan in the state's scene
+        (yet, or any more)."""
         workers = state.workers
         if workers is not None:
             try:
-                return workers.plan(start, goal, options, termination)
+                return workers.plan(start, goal, options, termination, state.scene_key)
             except WorkersClosed:
-                pass  # a newer roadmap came meanwhile, or every worker failed
+                pass  # a newer roadmap or scene came meanwhile, or every worker failed
             except WorkerFailed as exc:
                 left = workers.count
                 if not left:
@@ -520,7 +569,7 @@ class PlannerNode(Node):
                     f"{exc}; killed, its request plans in the node's process" + (
                         f", {left} worker(s) go on" if left else
                         ", and so does every request until the next roadmap"))
-        return state.planner.plan(start, goal, options, termination)
+        return state.planner.plan(start, goal, options, termination, world=state.world)
 
     def destroy_node(self):
         state = self._state
@@ -528,23 +577,68 @@ class PlannerNode(Node):
             state.workers.close()
         return super().destroy_node()
 
-    def _options(self, request):
-        """PlanOptions of a request; 0 and 0 limits take the node's defaults,
-        one limit alone is refused by PlanOptions."""
+    def _options(self, request, joint_names):
+        """PlanOptions of a request: its limits for all joints, or when both
+        are 0 the node's ``joint_limits.<joint>.*`` parameters where nonzero
+        and its defaults; then its limits of single joints."""
         limits = (request.max_velocity, request.max_acceleration)
+        if 0.0 in limits and limits != (0.0, 0.0):
+            raise InvalidInputError(f"give both max_velocity and max_acceleration, or neither: "
+                                    f"got max_velocity = {limits[0]}, "
+                                    f"max_acceleration = {limits[1]}")
         if limits == (0.0, 0.0):
-            limits = (self.get_parameter("default_max_velocity").value,
-                      self.get_parameter("default_max_acceleration").value)
-        limits = [None if v == 0.0 else v for v in limits]
+            per_joint = [[self._joint_limit(name, kind) or self.get_parameter(default).value
+                          for name in joint_names]
+                         for kind, default in _JOINT_LIMIT_DEFAULTS.items()]
+        else:
+            per_joint = [[value] * len(joint_names) for value in limits]
+        named = set()
+        for entry in request.joint_limits:
+            if entry.joint_name not in joint_names or entry.joint_name in named:
+                raise InvalidInputError(
+                    f"joint_limits: {entry.joint_name!r:.40} is not a joint of the mechanism "
+                    f"({', '.join(joint_names)}), or is named twice")
+            named.add(entry.joint_name)
+            at = joint_names.index(entry.joint_name)
+            for values, value in zip(per_joint, (entry.max_velocity, entry.max_acceleration)):
+                if not (math.isfinite(value) and value >= 0.0):
+                    raise InvalidInputError(f"joint_limits: {entry.joint_name}'s limits must be "
+                                            f"0 or positive and finite, got {value}")
+                values[at] = value or values[at]
+        # One value for all joints times the path as before per-joint limits.
+        velocity, acceleration = (values[0] if len(set(values)) == 1 else tuple(values)
+                                  for values in per_joint)
         tolerance = {"mode_tol": request.mode_tolerance} if request.mode_tolerance else {}
         return PlanOptions(smooth=request.smooth, weighted=request.weighted,
-                           feasibility_only=request.feasibility_only, max_velocity=limits[0],
-                           max_acceleration=limits[1],
+                           feasibility_only=request.feasibility_only, max_velocity=velocity,
+                           max_acceleration=acceleration,
                            clearance=self.get_parameter("clearance").value, **tolerance)
+
+    def _joint_limit(self, joint, kind):
+        """The node's ``joint_limits.<joint>.<kind>`` parameter (0: none)."""
+        name = f"joint_limits.{joint}.{kind}"
+        return self.get_parameter(name).value if self.has_parameter(name) else 0.0
+
+    def _declare_joint_limits(self, joint_names):
+        """Declare ``joint_limits.<joint>.max_velocity`` and
+        ``.max_acceleration`` for joints that have none yet: a parameters
+        file's values given at start are taken when declared."""
+        for joint in joint_names:
+            for kind, default in _JOINT_LIMIT_DEFAULTS.items():
+                name = f"joint_limits.{joint}.{kind}"
+                if not self.has_parameter(name):
+                    unit = "[joint unit/s]" if kind == "max_velocity" else "[joint unit/s^2]"
+                    self.declare_parameter(name, 0.0, ParameterDescriptor(
+                        description=f"{kind} of joint {joint} for requests that give no "
+                                    f"limits for all joints; 0 takes {default} {unit}",
+                        floating_point_range=[FloatingPointRange(from_value=0.0,
+                                                                 to_value=1e6)]))
 
     def _on_plan(self, request, response):
         state = self._state
-        begin = time.monotonic()
+        # A time limit counts from the request's reception: the time it
+        # waited for a free executor thread is the caller's too.
+        begin = time.monotonic() - request_age()
         try:
             if state is None:
                 return _error(response, PlanPath.Response.ERROR_NO_ROADMAP,
@@ -553,25 +647,36 @@ class PlannerNode(Node):
         except GWRError as exc:
             code = ERROR_CODES.get(exc.code, PlanPath.Response.ERROR_INTERNAL)
             return _error(_named(state), code, str(exc),
-                          FEASIBILITY.get(getattr(exc, "reason", None),
-                                          PlanPath.Response.FEASIBILITY_UNKNOWN))
+                          FEASIBILITY.get(exc.reason if isinstance(exc, InfeasiblePathError)
+                                          else None, PlanPath.Response.FEASIBILITY_UNKNOWN))
         except Exception as exc:  # a bug must not take the service down
             self.get_logger().error(f"internal error on a plan request: {exc!r}")
             return _error(_named(state), PlanPath.Response.ERROR_INTERNAL,
                           f"internal error: {exc!r}")
 
     def _answer(self, request, state, begin):
-        options = self._options(request)
+        options = self._options(request, state.planner.roadmap.mechanism.joint_names)
         limit = request.time_limit or self.get_parameter("default_time_limit").value
         if not (math.isfinite(limit) and limit > 0):
             raise InvalidInputError(f"time_limit must be positive and finite (or 0 for the "
                                     f"planner's default), got {request.time_limit}")
         termination = Termination(begin + limit)
+        if termination():
+            raise PlanningTimeoutError(
+                f"the request waited {time.monotonic() - begin:.3g} s for the planner, longer "
+                f"than its time limit of {limit:g} s: nothing was tried")
         mechanism = state.planner.roadmap.mechanism
-        start = configuration_from_msg(mechanism, request.start)
-        goal = configuration_from_msg(mechanism, request.goal)
-        plan = self._plan(state, start, goal, options, termination)
+        ends = [_plan_end(mechanism, *end) for end in (
+            ("start", request.start, request.start_is_pose, request.start_pose,
+             request.start_working_mode),
+            ("goal", request.goal, request.goal_is_pose, request.goal_pose,
+             request.goal_working_mode))]
+        resolved = resolve_ends(state.planner, *ends, options.mode_tol)
+        plan = self._plan(state, resolved.start, resolved.goal, options, termination)
         response = _named(state)
+        response.start_working_mode, response.goal_working_mode = (
+            "" if mode is None else mode.label
+            for mode in (resolved.start_mode, resolved.goal_mode))
         response.feasibility = FEASIBILITY[plan.reason]
         response.global_paths = [GlobalPath(patch_ids=list(g.patches), cost=g.cost)
                                  for g in plan.global_paths]
@@ -622,6 +727,53 @@ class PlannerNode(Node):
             self.get_logger().error(f"internal error on an assembly modes request: {exc!r}")
             return _failed(AssemblyModes.Response(), AssemblyModes.Response.ERROR_INTERNAL,
                            f"internal error: {exc!r}")
+
+
+    def _on_inverse_kinematics(self, request, response):
+        state = self._state
+        try:
+            if state is None:
+                return _failed(response, InverseKinematics.Response.ERROR_NO_ROADMAP,
+                               "no roadmap received yet on 'field' and 'roadmap'")
+            mechanism = state.planner.roadmap.mechanism
+            modes = working_modes(state.planner, pose_from_msg(mechanism, request.pose))
+            response.modes = [_working_mode_msg(mechanism, m) for m in modes]
+            response.success = True
+            response.error_code = InverseKinematics.Response.ERROR_NONE
+            return response
+        except GWRError as exc:
+            code = getattr(InverseKinematics.Response, f"ERROR_{exc.code}",
+                           InverseKinematics.Response.ERROR_INTERNAL)
+            return _failed(InverseKinematics.Response(), code, str(exc))
+        except Exception as exc:  # a bug must not take the service down
+            self.get_logger().error(f"internal error on an inverse kinematics request: "
+                                    f"{exc!r}")
+            return _failed(InverseKinematics.Response(),
+                           InverseKinematics.Response.ERROR_INTERNAL, f"internal error: {exc!r}")
+
+
+def _plan_end(mechanism, which, configuration, is_pose, pose, working_mode):
+    """One end of a plan request: its configuration, or its pose (a
+    :class:`~rpr3_gwr_core.planning.PoseEnd`) with its working mode."""
+    if not is_pose:
+        if working_mode:
+            raise InvalidInputError(f"{which}_working_mode is for a {which} given as a pose "
+                                    f"({which}_is_pose)")
+        return configuration_from_msg(mechanism, configuration)
+    return PoseEnd(pose_from_msg(mechanism, pose), working_mode or None)
+
+
+def _working_mode_msg(mechanism, mode):
+    """A core :class:`~rpr3_gwr_core.planning.WorkingMode` as a message."""
+    *joints, coordinate = mode.configuration
+    located = mode.patch is not None
+    return WorkingModeMsg(
+        working_mode=mode.label,
+        configuration=Configuration(joint_names=list(mechanism.joint_names),
+                                    positions=[float(v) for v in joints], mode=coordinate),
+        aspect=mode.aspect, signed_margin=float(mode.margin), in_box=bool(mode.in_box),
+        on_slice=bool(mode.on_slice), located=located,
+        patch=int(mode.patch) if located else 0, unlocated=mode.unlocated)
 
 
 class _CompileNotice(numba_event.Listener):
@@ -706,4 +858,4 @@ def main(args=None):
     # Two threads per core: a thread waits while a worker plans, and converts
     # the plan to messages while the worker plans the next request (8
     # clients on 2 cores: 188 requests/s with 2 threads, 242 with 4, 243 with 6).
-    run(PlannerNode, MultiThreadedExecutor, args, usage=USAGE, num_threads=2 * _CORES)
+    return run(PlannerNode, ReceiptExecutor, args, usage=USAGE, num_threads=2 * _CORES)

@@ -4,7 +4,7 @@ kind of topic and the frame of the mechanism's base."""
 from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy,
                        qos_profile_sensor_data)
 
-__all__ = ["LATCHED_QOS", "STATE_QOS", "SENSOR_QOS", "SERVICE_QOS", "BASE_FRAME"]
+__all__ = ["LATCHED_QOS", "STATE_QOS", "SENSOR_QOS", "SERVICE_QOS", "TF_QOS", "BASE_FRAME"]
 
 # Maps, roadmaps and scenes (and the scene each node applies), as nav2's map
 # server: the latest one, to late joiners too (subscribers use the same
@@ -35,5 +35,10 @@ STATE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
 # Readers of those streams that would rather skip a sample than wait for its
 # resend (the recorder): best effort matches a reliable writer too.
 SENSOR_QOS = qos_profile_sensor_data
+# /tf, as tf2_ros's TransformBroadcaster (DynamicBroadcasterQoS): reliable,
+# volatile, the last 100, so that RViz and every TransformListener take it.
+TF_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
+                    reliability=ReliabilityPolicy.RELIABLE,
+                    durability=DurabilityPolicy.VOLATILE)
 # The frame of the base points A1..A3 and of every pose.
 BASE_FRAME = "base"

@@ -10,7 +10,9 @@ late joiners get the latest):
   (x, y = the two free joints, for the paper's slice rho2 and rho3):
   ``field_count_map`` and ``field_region_map`` (nav_msgs/OccupancyGrid, as
   maps) and ``roadmap_markers`` (visualization_msgs/MarkerArray: patch
-  labels, gates).
+  labels, gates), and on ``/tf_static`` (tf2_msgs/TFMessage, as tf2_ros's
+  static broadcaster) the transform from ``base`` to ``joint_space``, which
+  places the latter beside the mechanism (:func:`.visualization.joint_space_transform`).
 
 Parameters: the mechanism (``mechanism_file``, read-only,
 :mod:`.mechanism_parameters`; the paper's 3-RPR by default) and the slice,
@@ -50,6 +52,7 @@ from rpr3_gwr_core.workspace.grid import Axis, Grid, check_roadmap_grid
 from nav_msgs.msg import OccupancyGrid
 from rpr3_gwr_msgs.msg import NSolutionField, WorkspaceRoadmap
 from std_msgs.msg import Header
+from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
 
 from .conversions import roadmap_to_msgs
@@ -58,7 +61,7 @@ from .mechanism_parameters import declare_mechanism, home_source
 from .memory import release_free_memory, use_one_arena
 from .profiles import BASE_FRAME, LATCHED_QOS
 from .spin import run
-from .visualization import field_maps, roadmap_markers
+from .visualization import field_maps, joint_space_transform, roadmap_markers
 
 __all__ = ["RoadmapBuilder", "main", "USAGE"]
 
@@ -71,7 +74,7 @@ the grid parameters rebuilds and republishes it.
 
 Publishes   field (rpr3_gwr_msgs/msg/NSolutionField), roadmap
             (rpr3_gwr_msgs/msg/WorkspaceRoadmap), both latched; on 2-D grids
-            field_count_map, field_region_map, roadmap_markers
+            field_count_map, field_region_map, roadmap_markers, /tf_static
 Parameters  mechanism_file ('' for the paper's 3-RPR, read-only),
             fixed_value (the first joint's value on the slice), ranges
             ([min, max] of each free joint, [] for the file's box), step (0
@@ -120,6 +123,8 @@ class RoadmapBuilder(Node):
         self.map_pubs = [self.create_publisher(OccupancyGrid, topic, LATCHED_QOS)
                          for topic in ("field_count_map", "field_region_map")]
         self.marker_pub = self.create_publisher(MarkerArray, "roadmap_markers", LATCHED_QOS)
+        # As tf2_ros's StaticTransformBroadcaster: the latest, to late joiners.
+        self.tf_static_pub = self.create_publisher(TFMessage, "/tf_static", LATCHED_QOS)
         self.roadmap = None
         # The grid parameters of the published roadmap.
         self._published = None
@@ -139,13 +144,14 @@ class RoadmapBuilder(Node):
         values.update(overrides or {})
         return values
 
-    def _grid(self, values):
+    def _grid(self, values, progress=None, workers=map):
         """The grid and refinement the parameter values ask for (a mechanism
-        file's whole box refined adaptively when it is large, as the CLI's)."""
+        file's whole box refined adaptively when it is large, to fit in
+        memory, as the CLI's: its base grid is solved here)."""
         if values["full"]:
             if self.mechanism == PAPER_GEOMETRY:
                 return FULL_BASE_GRID, FULL_REFINEMENT
-            return roadmap_grid(self.described.grid())
+            return roadmap_grid(self.described, progress=progress, workers=workers), None
         first = self.mechanism.joint_names[0]
         box = self.described.grid({first: values["fixed_value"]})
         ranges, step = list(values["ranges"] or []), values["step"]
@@ -174,8 +180,14 @@ class RoadmapBuilder(Node):
         overrides = {p.name: p.value for p in parameters if p.name in _GRID_PARAMETERS}
         if not overrides:
             return SetParametersResult(successful=True)
+        values = self._values(overrides)
+        if values["full"]:
+            # Whether a file's whole box fits is known once its base grid is
+            # solved, too long for this callback: the build says so and keeps
+            # the published roadmap.
+            return SetParametersResult(successful=True)
         try:
-            grid, refinement = self._grid(self._values(overrides))
+            grid, refinement = self._grid(values)
         except (GWRError, TypeError, ValueError) as exc:
             return SetParametersResult(successful=False, reason=f"invalid grid: {exc}")
         if refinement is not None:
@@ -199,20 +211,7 @@ class RoadmapBuilder(Node):
 
     def _build(self):
         values = self._values()
-        try:
-            grid, refinement = self._grid(values)
-        except GWRError as exc:  # given at start-up: refused, not checked
-            self.get_logger().error(f"invalid grid: {exc}")
-            self._keep_last_good()
-            return
         names = self.mechanism.joint_names
-        if values["full"]:
-            self.get_logger().info(f"building the full roadmap of the {self.mechanism.kind} "
-                                   "(every joint free) or loading it from the cache")
-        else:
-            fixed = ", ".join(f"{names[joint]} = {value:g}" for joint, value in grid.fixed)
-            self.get_logger().info(f"building the roadmap of the {self.mechanism.kind}: "
-                                   f"{fixed}, {' x '.join(map(str, grid.shape))} cells")
         start = time.perf_counter()
         logged = {"stage": None, "at": -math.inf}
 
@@ -226,18 +225,31 @@ class RoadmapBuilder(Node):
             logged.update(stage=stage, at=now)
             self.get_logger().info(f"  {fraction:4.0%} {stage} ({now - start:.1f} s)")
 
-        try:
-            with core_threads() as pool:
+        if values["full"]:
+            self.get_logger().info(f"building the full roadmap of the {self.mechanism.kind} "
+                                   "(every joint free) or loading it from the cache")
+        with core_threads() as pool:
+            try:
+                grid, refinement = self._grid(values, progress, pool.map)
+            except GWRError as exc:  # given at start-up or a whole box: refused here
+                self.get_logger().error(f"invalid grid: {exc}")
+                self._keep_last_good()
+                return
+            if not values["full"]:
+                fixed = ", ".join(f"{names[joint]} = {value:g}" for joint, value in grid.fixed)
+                self.get_logger().info(f"building the roadmap of the {self.mechanism.kind}: "
+                                       f"{fixed}, {' x '.join(map(str, grid.shape))} cells")
+            try:
                 if values["full"]:
                     roadmap, _ = cached_roadmap(self.mechanism, grid, progress=progress,
                                                 refinement=refinement, workers=pool.map)
                 else:
                     roadmap = build_roadmap(self.mechanism, grid, progress=progress,
                                             workers=pool.map)
-        except Exception as exc:  # a failed build must not take the builder down
-            self.get_logger().error(f"building the roadmap failed: {exc!r}")
-            self._keep_last_good()
-            return
+            except Exception as exc:  # a failed build must not take the builder down
+                self.get_logger().error(f"building the roadmap failed: {exc!r}")
+                self._keep_last_good()
+                return
         seg = roadmap.segmentation
         if not seg.patches:
             self.get_logger().error("the roadmap has no patch")
@@ -257,6 +269,8 @@ class RoadmapBuilder(Node):
             for publisher, grid_map in zip(self.map_pubs, maps):
                 publisher.publish(grid_map)
             self.marker_pub.publish(roadmap_markers(roadmap, header.stamp))
+            self.tf_static_pub.publish(TFMessage(
+                transforms=[joint_space_transform(roadmap, header.stamp)]))
         self.get_logger().info(
             f"{'ready: ' if first else ''}published the roadmap on "
             f"{self.roadmap_pub.topic_name} and {self.field_pub.topic_name}: "
@@ -278,4 +292,4 @@ class RoadmapBuilder(Node):
 def main(args=None):
     # So that release_free_memory reaches the memory of every thread.
     use_one_arena()
-    run(RoadmapBuilder, MultiThreadedExecutor, args, usage=USAGE)
+    return run(RoadmapBuilder, MultiThreadedExecutor, args, usage=USAGE)

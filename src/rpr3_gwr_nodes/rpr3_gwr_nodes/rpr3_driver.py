@@ -40,18 +40,28 @@ mode unless a singularity is crossed.
   second or more), negative or not strictly increasing, a joint faster than
   ``max_velocity``, a first point farther than ``start_tolerance`` from the
   current joints (by whole turns for a joint that turns fully), or another
-  goal executing.  Before each control step the
-  driver checks where the platform would go: if the margin would fall below
-  ``abort_margin``, det(Jx) would change sign, or the platform could not
-  follow, it aborts the goal, says why and with which margin, and holds still
-  at the last safe joints.  In a scene, each control step's stretch of the
-  path (from the current joints through the waypoints passed to the
-  step's target) is then checked continuously with the core
+  goal executing (:mod:`.goal_checks` makes the checks but the last).  Before
+  each control step the driver checks where the platform would go: if the
+  margin would fall below ``abort_margin``, det(Jx) would change sign, or
+  the platform could not follow, it aborts the goal, says why and with which
+  margin, and holds still at the last safe joints.  In a scene, each
+  control step's stretch of the path (from the current joints through the
+  waypoints passed to the step's target) is then checked continuously with the core
   (``path_collisions``): if a body would come within ``obstacle_clearance``
   of an obstacle, bodies would overlap, or a joint would leave its range,
   the goal aborts with ``COLLISION_ABORT`` before the step, naming the body
   (or joint) and the obstacle (or range), and the driver holds at the last
   free joints;
+* ``~/follow_joint_trajectory`` (control_msgs/FollowJointTrajectory action):
+  the same replay for code written for ros2_control's
+  joint_trajectory_controller, its goals validated as that controller does
+  (every joint once in any order, the last point at rest, no multi-DOF
+  points, a header stamp whose trajectory has not ended; a future one starts
+  then) and by the checks above, an abort on the way ending the goal
+  ``PATH_TOLERANCE_VIOLATED`` with the reason;
+* ``/tf`` (tf2_msgs/TFMessage, tf2_ros's broadcaster's QoS, ``rate`` Hz): from
+  ``base`` to each link's frame and the platform's (:mod:`.frames`), names
+  prefixed by ``frame_prefix``;
 * ``scene`` (rpr3_gwr_msgs/Scene, reliable, transient local, as the
   planner's): the obstacles and limits executions are checked against, from
   the next control step on (one without obstacles and joint ranges: none).
@@ -82,17 +92,23 @@ from rpr3_gwr_core.planning import DEFAULT_MAX_STEP
 from rpr3_gwr_core.planning.locate import DEFAULT_MODE_TOL
 from rpr3_gwr_core.world import configuration_collision, path_collisions
 from rpr3_gwr_core.world.collision import INTERFERENCE, OBSTACLE
+from control_msgs.action import FollowJointTrajectory
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import PlatformPose, Scene
 from rpr3_gwr_msgs.srv import ResetDriver
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Header
+from tf2_msgs.msg import TFMessage
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from visualization_msgs.msg import MarkerArray
 
 from .conversions import (configuration_from_msg, duration_msg, is_empty_scene, pose_msg,
-                          scene_from_msg, scene_to_msg)
+                          scene_from_msg, scene_msg_from_bytes, scene_to_msg)
+from .frames import frame_transforms
+from .goal_checks import (CONTROLLER_CODES, check_follow_trajectory, check_trajectory,
+                          start_problem, trajectory_fields, whole_turns)
 from .mechanism_parameters import declare_mechanism, home_source, kept_scene
-from .profiles import BASE_FRAME, LATCHED_QOS, STATE_QOS
+from .profiles import BASE_FRAME, LATCHED_QOS, STATE_QOS, TF_QOS
 from .spin import run
 from .visualization import mechanism_markers, scene_markers
 
@@ -106,19 +122,42 @@ joint trajectories, following its platform by continuation, and aborts
 before a singularity, an assembly-mode change or a collision.
 
 Serves      execute_trajectory (rpr3_gwr_msgs/action/ExecuteTrajectory),
+            ~/follow_joint_trajectory (control_msgs/action/FollowJointTrajectory),
             reset (rpr3_gwr_msgs/srv/ResetDriver)
 Subscribes  scene (latched)
-Publishes   joint_states, platform_pose, mechanism_markers, /diagnostics,
+Publishes   joint_states, platform_pose, mechanism_markers, /diagnostics, /tf,
             scene_markers, ~/current_scene
 Parameters  mechanism_file ('' for the paper's 3-RPR, read-only),
             initial_configuration (joints then mode coordinate, read-only),
             rate (100 Hz), time_scale (1.0), max_velocity (50 /s),
-            start_tolerance (1e-3), abort_margin (5e-4), warn_margin (0.02)
+            start_tolerance (1e-3), abort_margin (5e-4), warn_margin (0.02),
+            frame_prefix ('', read-only)
 Example     ros2 run rpr3_gwr_nodes rpr3_driver --ros-args -p time_scale:=10.0
 """
 
 _Result = ExecuteTrajectory.Result
 _Reset = ResetDriver.Response
+
+# How an execution ends.
+_SUCCEEDED, _CANCELED, _SHUT_DOWN, _START_MISMATCH = "succeeded", "canceled", "shut down", \
+    "start mismatch"
+_SINGULARITY, _MODE_LEFT, _COLLISION, _INTERNAL_ERROR = "singularity", "mode left", \
+    "collision", "internal error"
+# The aborts after which the driver holds until a reset or a goal that succeeds.
+_HOLDING_ENDINGS = (_SINGULARITY, _MODE_LEFT, _COLLISION)
+_Follow = FollowJointTrajectory.Result
+# As joint_trajectory_controller ends goals: an abort on the way is a path
+# tolerance violated (the driver holds where the trajectory left it).
+_FOLLOW_CODES = {
+    _SUCCEEDED: _Follow.SUCCESSFUL, _CANCELED: _Follow.SUCCESSFUL,
+    _SHUT_DOWN: _Follow.INVALID_GOAL, _INTERNAL_ERROR: _Follow.INVALID_GOAL,
+    **dict.fromkeys((_START_MISMATCH, _SINGULARITY, _MODE_LEFT, _COLLISION),
+                    _Follow.PATH_TOLERANCE_VIOLATED)}
+_EXECUTE_CODES = {_SUCCEEDED: _Result.SUCCESS, _CANCELED: _Result.CANCELED,
+                  _SHUT_DOWN: _Result.CANCELED, _START_MISMATCH: _Result.START_MISMATCH,
+                  _SINGULARITY: _Result.SINGULARITY_ABORT,
+                  _MODE_LEFT: _Result.ASSEMBLY_MODE_LEFT, _COLLISION: _Result.COLLISION_ABORT,
+                  _INTERNAL_ERROR: _Result.INVALID_TRAJECTORY}
 
 
 def _seconds(duration):
@@ -133,6 +172,21 @@ def _collision_reason(hit, clearance):
     if hit.kind == INTERFERENCE:
         return f"{hit.body} and {hit.other} would overlap"
     return f"joint {hit.body} would leave its range {hit.other}"
+
+
+def _in_order(trajectory, names):
+    """A JointTrajectory's points with their joints in the order ``names``
+    (the trajectory names each once, in any order)."""
+    order = [list(trajectory.joint_names).index(name) for name in names]
+
+    def picked(values):
+        return [values[k] for k in order] if len(values) == len(order) else list(values)
+
+    return JointTrajectory(header=trajectory.header, joint_names=list(names), points=[
+        JointTrajectoryPoint(positions=picked(p.positions), velocities=picked(p.velocities),
+                             accelerations=picked(p.accelerations), effort=list(p.effort),
+                             time_from_start=p.time_from_start)
+        for p in trajectory.points])
 
 
 def _slope(times, positions, t):
@@ -173,6 +227,9 @@ class Rpr3Driver(Node):
         positive("time_scale", 1.0, "Playback speed factor: 2 replays twice as fast", 1000.0)
         positive("max_velocity", 50.0, "Fastest joint speed a trajectory may ask for, as it is "
                  "timed [joint unit/s]")
+        self.declare_parameter("frame_prefix", "", ParameterDescriptor(
+            description="Put before the name of each frame broadcast on /tf (not base), as "
+                        "robot_state_publisher's", read_only=True))
         described = declare_mechanism(self)
         self.mechanism = described.mechanism
         # The widths and layers of the bodies a scene is checked with.
@@ -180,7 +237,6 @@ class Rpr3Driver(Node):
         names = self.mechanism.joint_names
         # Joint ranges are the file's box; a joint that turns fully has none.
         self.limits = [None if a.periodic else (a.low, a.high) for a in described.axes]
-        self._periodic = np.array([a.periodic for a in described.axes])
         self.declare_parameter(
             "initial_configuration", Parameter.Type.DOUBLE_ARRAY,
             ParameterDescriptor(
@@ -205,13 +261,15 @@ class Rpr3Driver(Node):
                                         Parameter("initial_configuration")).value
         if initial is None:
             initial = described.default_home()
-            self.get_logger().info(f"starting at {home_source(described)}")
+            self.get_logger().info(f"starting at {home_source(described)}: "
+                                   f"{', '.join(f'{v:g}' for v in initial)}")
         self.rho, self.pose, self.margin = self._assembly(initial)
         self.velocity = np.zeros(len(names))
         self.joint_pub = self.create_publisher(JointState, "joint_states", STATE_QOS)
         self.pose_pub = self.create_publisher(PlatformPose, "platform_pose", STATE_QOS)
         self.marker_pub = self.create_publisher(MarkerArray, "mechanism_markers", STATE_QOS)
         self.diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", STATE_QOS)
+        self.tf_pub = self.create_publisher(TFMessage, "/tf", TF_QOS)
         timers = MutuallyExclusiveCallbackGroup()
         self.create_timer(1.0 / self.get_parameter("rate").value, self._publish_state,
                           callback_group=timers)
@@ -219,15 +277,23 @@ class Rpr3Driver(Node):
         self.create_service(ResetDriver, "reset", self._on_reset)
         self.scene_pub = self.create_publisher(Scene, "~/current_scene", LATCHED_QOS)
         self.scene_marker_pub = self.create_publisher(MarkerArray, "scene_markers", LATCHED_QOS)
+        # Raw: a message too long to be a scene is refused unread.
         self.create_subscription(Scene, "scene", self._on_scene, LATCHED_QOS,
-                                 callback_group=MutuallyExclusiveCallbackGroup())
+                                 callback_group=MutuallyExclusiveCallbackGroup(), raw=True)
         self._action = ActionServer(
             self, ExecuteTrajectory, "execute_trajectory", self._execute,
             goal_callback=self._on_goal, cancel_callback=lambda _: CancelResponse.ACCEPT,
             callback_group=ReentrantCallbackGroup())
+        # Where joint_trajectory_controller serves it: under the node's name.
+        self._follow_action = ActionServer(
+            self, FollowJointTrajectory, "~/follow_joint_trajectory", self._execute_follow,
+            goal_callback=self._on_follow_goal,
+            cancel_callback=lambda _: CancelResponse.ACCEPT,
+            callback_group=ReentrantCallbackGroup())
         joints = ", ".join(f"{n} = {v:g}" for n, v in zip(names, self.rho))
         self.get_logger().info(
-            f"ready: serving {self.resolve_service_name('execute_trajectory')} and "
+            f"ready: serving {self.resolve_service_name('execute_trajectory')}, "
+            f"{self.resolve_service_name('~/follow_joint_trajectory')} and "
             f"{self.resolve_service_name('reset')}, publishing "
             f"{self.joint_pub.topic_name} at {self.get_parameter('rate').value:g} Hz, at "
             f"{joints}; following the scene on {self.resolve_topic_name('scene')}")
@@ -304,6 +370,9 @@ class Rpr3Driver(Node):
         msg.name, msg.position, msg.velocity = names, position, speed
         self.joint_pub.publish(msg)
         self.pose_pub.publish(pose_msg(self.mechanism, pose))
+        self.tf_pub.publish(TFMessage(transforms=frame_transforms(
+            self.mechanism, pose, rho, msg.header.stamp,
+            self.get_parameter("frame_prefix").value)))
         with self._lock:
             collision = self._collision
         self.marker_pub.publish(mechanism_markers(
@@ -345,8 +414,9 @@ class Rpr3Driver(Node):
 
     # --- scene -------------------------------------------------------------------------------
 
-    def _on_scene(self, msg):
+    def _on_scene(self, data):
         try:
+            msg = scene_msg_from_bytes(data)
             scene = scene_from_msg(msg)
             if is_empty_scene(scene):
                 scene = None
@@ -404,8 +474,18 @@ class Rpr3Driver(Node):
 
     def _on_goal(self, goal_request):
         """Accept a valid goal and take the driver for it; reject anything else."""
+        return self._take(lambda: self._problem(goal_request.trajectory))
+
+    def _on_follow_goal(self, goal_request):
+        """Accept a valid FollowJointTrajectory goal, as joint_trajectory_controller
+        validates one, and take the driver for it; reject anything else."""
+        return self._take(lambda: self._follow_problem(goal_request))
+
+    def _take(self, find_problem):
+        """Take the driver for a goal ``find_problem()`` finds nothing wrong
+        with (None), unless another goal has it; else reject, saying why."""
         try:
-            problem = self._problem(goal_request.trajectory)
+            problem = find_problem()
         except Exception as exc:  # a bug must not take the driver down
             problem = f"internal error: {exc!r}"
         if problem is None:
@@ -419,86 +499,164 @@ class Rpr3Driver(Node):
             return GoalResponse.REJECT
         return GoalResponse.ACCEPT
 
+    def _limits(self):
+        """The driver's state and parameters :mod:`.goal_checks` checks a goal with."""
+        rho, _, _ = self.state()
+        return {"ranges": self.limits, "max_velocity": self.get_parameter("max_velocity").value,
+                "current_joints": rho,
+                "start_tolerance": self.get_parameter("start_tolerance").value}
+
     def _problem(self, trajectory):
         """Why a trajectory cannot be executed from here, or None."""
+        verdict = check_trajectory(**trajectory_fields(trajectory),
+                                   mechanism_joints=self.mechanism.joint_names, **self._limits())
+        return None if verdict.accepted else verdict.reason
+
+    def _follow_problem(self, goal):
+        """Why a FollowJointTrajectory goal cannot be executed from here, or
+        None: joint_trajectory_controller's checks, then :meth:`_problem`'s
+        on the trajectory in the mechanism's order
+        (:func:`.goal_checks.check_follow_trajectory`)."""
         names = list(self.mechanism.joint_names)
-        if list(trajectory.joint_names) != names:
-            return f"joint names must be {names}, got {list(trajectory.joint_names)}"
-        points = trajectory.points
-        if not points:
-            return "the trajectory has no points"
-        joints = len(names)
-        if any(len(p.positions) != joints for p in points):
-            return f"every point needs {joints} positions"
-        for field in ("velocities", "accelerations"):
-            # Empty, as joint_trajectory_controller allows: not given.
-            if any(len(getattr(p, field)) not in (0, joints) for p in points):
-                return f"{field} must be empty or {joints} per point"
-            if not all(math.isfinite(v) for p in points for v in getattr(p, field)):
-                return f"{field} must be finite"
-        if any(len(p.effort) for p in points):
-            return "the joints are position controlled: effort must be empty"
-        positions = np.array([list(p.positions) for p in points])
-        if not np.all(np.isfinite(positions)):
-            return "positions must be finite"
-        for k, (name, limit) in enumerate(zip(names, self.limits)):
-            if limit is not None and (np.any(positions[:, k] < limit[0])
-                                      or np.any(positions[:, k] > limit[1])):
-                return f"{name} must lie within its range [{limit[0]:g}, {limit[1]:g}]"
-        # A nanosec field of a second or more would shift the stamp past
-        # the checks below (sec -1 and nanosec 2e9 read as +1 s).
-        if any(p.time_from_start.nanosec >= 10**9 for p in points):
-            return "time_from_start.nanosec must be below 10^9 (a second)"
-        times = np.array([_seconds(p.time_from_start) for p in points])
-        if np.any(times < 0):
-            return "time_from_start must not be negative"
-        if np.any(np.diff(times) <= 0):
-            return "time_from_start must increase strictly"
-        if len(points) > 1:
-            speed = np.max(np.abs(np.diff(positions, axis=0)) / np.diff(times)[:, None])
-            limit = self.get_parameter("max_velocity").value
-            if speed > limit:
-                return f"a joint would move at {speed:.3g} joint unit/s, above max_velocity " \
-                       f"{limit:g}"
-        return self._start_gap(positions[0])
+        stamp = goal.trajectory.header.stamp
+        verdict = check_follow_trajectory(
+            **trajectory_fields(goal.trajectory),
+            multi_dof_joints=list(goal.multi_dof_trajectory.joint_names),
+            multi_dof_points=len(goal.multi_dof_trajectory.points),
+            header_stamp=(stamp.sec, stamp.nanosec),
+            now=self.get_clock().now().nanoseconds * 1e-9, mechanism_joints=names,
+            **self._limits())
+        # The tolerances of a goal the controller's own checks refuse are
+        # not worth a warning beside the reason it is refused for.
+        if verdict.code not in CONTROLLER_CODES:
+            self._warn_about_tolerances(goal, names)
+        return None if verdict.accepted else verdict.reason
+
+    def _warn_about_tolerances(self, goal, names):
+        """Tolerances of unknown joints, or neither -1 (none), 0 (default)
+        nor positive, are ignored with a warning, as joint_trajectory_controller
+        does; the simulation follows its trajectory exactly, so others hold."""
+        for field in ("path_tolerance", "goal_tolerance"):
+            for tolerance in getattr(goal, field):
+                values = (tolerance.position, tolerance.velocity, tolerance.acceleration)
+                if tolerance.name not in names or not all(
+                        v == -1.0 or (math.isfinite(v) and v >= 0.0) for v in values):
+                    self.get_logger().warning(f"ignoring the goal's {field}: joint "
+                                              f"{tolerance.name!r:.40} {values}")
+                    break
 
     def _turns(self, first):
         """Whole turns that bring the trajectory's ``first`` point nearest the
         current joints (0 for a joint that does not turn fully)."""
         rho, _, _ = self.state()
-        return np.where(self._periodic, 2 * np.pi * np.round((rho - first) / (2 * np.pi)), 0.0)
+        return whole_turns(first, rho, self.limits)
 
     def _start_gap(self, first):
         rho, _, _ = self.state()
-        gap = float(np.max(np.abs(first + self._turns(first) - rho)))
-        if gap > self.get_parameter("start_tolerance").value:
-            return f"the trajectory starts {gap:.4g} away from the current joints {rho.tolist()}"
-        return None
+        return start_problem(first, rho, self.limits, self.get_parameter("start_tolerance").value)
 
     def _execute(self, goal_handle):
         result = _Result()
         try:
-            return self._run(goal_handle, result)
+            trajectory = goal_handle.request.trajectory
+            positions = np.array([list(p.positions) for p in trajectory.points])
+            times = np.array([_seconds(p.time_from_start) for p in trajectory.points])
+            feedback = ExecuteTrajectory.Feedback()
+
+            def publish_feedback(elapsed, pose, margin):
+                feedback.progress = float(elapsed / times[-1]) if times[-1] > 0 else 1.0
+                feedback.singularity_margin = abs(margin)
+                feedback.time_from_start = duration_msg(elapsed)
+                feedback.pose = pose_msg(self.mechanism, pose)
+                goal_handle.publish_feedback(feedback)
+
+            ending, reason, smallest = self._replay(goal_handle, positions, times,
+                                                    publish_feedback)
         except Exception as exc:  # a bug must not take the driver down
             self.get_logger().error(f"internal error executing a trajectory: {exc!r}")
-            return self._abort(goal_handle, result, _Result.INVALID_TRAJECTORY,
-                               f"internal error: {exc!r}", None)
+            ending, reason, smallest = _INTERNAL_ERROR, f"internal error: {exc!r}", None
         finally:
             with self._lock:
                 self.velocity = np.zeros(self.mechanism.n_joints)
                 self._active = False
+        self._conclude(goal_handle, ending, reason)
+        result.error_code, result.error_msg = _EXECUTE_CODES[ending], reason
+        _, pose, margin = self.state()
+        result.final_pose = pose_msg(self.mechanism, pose)
+        result.min_singularity_margin = float(abs(margin) if smallest is None else smallest)
+        return result
 
-    def _run(self, goal_handle, result):
-        trajectory = goal_handle.request.trajectory
-        positions = np.array([list(p.positions) for p in trajectory.points])
+    def _execute_follow(self, goal_handle):
+        result = FollowJointTrajectory.Result()
+        names = list(self.mechanism.joint_names)
+        try:
+            trajectory = _in_order(goal_handle.request.trajectory, names)
+            positions = np.array([list(p.positions) for p in trajectory.points])
+            times = np.array([_seconds(p.time_from_start) for p in trajectory.points])
+            feedback = FollowJointTrajectory.Feedback(joint_names=names)
+
+            def publish_feedback(elapsed, pose, margin):
+                with self._lock:
+                    rho, velocity = self.rho.tolist(), self.velocity.tolist()
+                feedback.header.stamp = self.get_clock().now().to_msg()
+                at = duration_msg(elapsed)
+                # The simulation follows the trajectory exactly.
+                for point in (feedback.desired, feedback.actual):
+                    point.positions, point.velocities, point.time_from_start = rho, velocity, at
+                feedback.error.positions = [0.0] * len(rho)
+                feedback.error.time_from_start = at
+                goal_handle.publish_feedback(feedback)
+
+            ending, reason = self._wait_for_start(goal_handle, trajectory.header.stamp), ""
+            if ending is None:
+                ending, reason, _ = self._replay(goal_handle, positions, times,
+                                                 publish_feedback)
+        except Exception as exc:  # a bug must not take the driver down
+            self.get_logger().error(f"internal error executing a trajectory: {exc!r}")
+            ending, reason = _INTERNAL_ERROR, f"internal error: {exc!r}"
+        finally:
+            with self._lock:
+                self.velocity = np.zeros(self.mechanism.n_joints)
+                self._active = False
+        self._conclude(goal_handle, ending, reason)
+        result.error_code, result.error_string = _FOLLOW_CODES[ending], reason
+        return result
+
+    def _wait_for_start(self, goal_handle, stamp):
+        """Wait until a trajectory's header ``stamp`` (none when zero, or
+        passed); the ending when a cancel or the driver's shutdown came
+        first, else None."""
+        begin = _seconds(stamp)
+        period = 1.0 / self.get_parameter("rate").value
+        while begin > self.get_clock().now().nanoseconds * 1e-9:
+            if goal_handle.is_cancel_requested:
+                return _CANCELED
+            if self._stopping.is_set():
+                return _SHUT_DOWN
+            time.sleep(period)
+        return None
+
+    def _replay(self, goal_handle, positions, times, publish_feedback):
+        """Move the joints along ``positions`` (shape (n, n_joints)) at
+        ``times`` (shape (n,), [s] from the start) in real time scaled by
+        ``time_scale``, the platform following, until the end, a cancel, the
+        driver's shutdown or an abort (before the step that would reach a
+        singularity, leave the assembly mode or collide);
+        ``publish_feedback(elapsed [s], pose, margin)`` after each step.
+
+        Returns
+        -------
+        (str, str, float or None)
+            How it ended (``_SUCCEEDED``, ``_CANCELED``, ...), why ("" for a success),
+            and the smallest margin met (None before the first step).
+        """
         # Counted from the current turn of the joints that turn fully, as the
         # plan's path is continuous.
-        positions += self._turns(positions[0])
-        times = np.array([_seconds(p.time_from_start) for p in trajectory.points])
+        positions = positions + self._turns(positions[0])
         # A reset may have moved the platform since the goal was accepted.
         moved = self._start_gap(positions[0])
         if moved is not None:
-            return self._abort(goal_handle, result, _Result.START_MISMATCH, moved, None)
+            return _START_MISMATCH, moved, None
         with self._lock:
             self._collision = None  # the highlight is of the goal that aborted on it
         scale = self.get_parameter("time_scale").value
@@ -507,17 +665,13 @@ class Rpr3Driver(Node):
         _, _, margin0 = self.state()
         sign = math.copysign(1.0, margin0)
         smallest = abs(margin0)
-        feedback = ExecuteTrajectory.Feedback()
         begin = time.monotonic()
         elapsed = -1.0
         while True:
             if goal_handle.is_cancel_requested:
-                goal_handle.canceled()
-                result.error_code, result.error_msg = _Result.CANCELED, "canceled"
-                return self._finish(result, smallest)
+                return _CANCELED, "canceled", smallest
             if self._stopping.is_set():
-                return self._abort(goal_handle, result, _Result.CANCELED,
-                                   "the driver is shutting down", smallest)
+                return _SHUT_DOWN, "the driver is shutting down", smallest
             previous = elapsed
             elapsed = min((time.monotonic() - begin) * scale, times[-1])
             target = np.array([np.interp(elapsed, times, positions[:, j])
@@ -530,19 +684,15 @@ class Rpr3Driver(Node):
                                     abort_margin)
             at = f"at t = {elapsed:.3f} s"
             if followed is None:
-                return self._abort(goal_handle, result, _Result.SINGULARITY_ABORT,
-                                   f"the platform cannot follow the joints {at}: a singularity "
-                                   f"(margin {smallest:.2e} before it)", smallest)
+                return (_SINGULARITY, f"the platform cannot follow the joints {at}: a "
+                        f"singularity (margin {smallest:.2e} before it)", smallest)
             new_pose, margin, extreme = followed
             if math.copysign(1.0, extreme) != sign:
-                return self._abort(goal_handle, result, _Result.ASSEMBLY_MODE_LEFT,
-                                   f"det(Jx) would change sign {at} (margin {extreme:+.2e}): "
-                                   "the platform would leave its assembly mode", smallest)
+                return (_MODE_LEFT, f"det(Jx) would change sign {at} (margin {extreme:+.2e}): "
+                        "the platform would leave its assembly mode", smallest)
             if abs(extreme) < abort_margin:
-                return self._abort(goal_handle, result, _Result.SINGULARITY_ABORT,
-                                   f"singularity margin would fall to {abs(extreme):.2e} "
-                                   f"< abort_margin {abort_margin:g} {at}",
-                                   min(smallest, abs(extreme)))
+                return (_SINGULARITY, f"singularity margin would fall to {abs(extreme):.2e} "
+                        f"< abort_margin {abort_margin:g} {at}", min(smallest, abs(extreme)))
             scene = kept_scene(self._scene, self.bodies)
             if scene is not None:
                 hit = path_collisions(self.mechanism, scene,
@@ -551,27 +701,21 @@ class Rpr3Driver(Node):
                 if hit is not None:
                     with self._lock:
                         self._collision = hit
-                    return self._abort(goal_handle, result, _Result.COLLISION_ABORT,
-                                       f"{_collision_reason(hit, scene.limits.obstacle_clearance)}"
-                                       f" {at}: holding at the last free joints", smallest)
+                    return (_COLLISION,
+                            f"{_collision_reason(hit, scene.limits.obstacle_clearance)} {at}: "
+                            "holding at the last free joints", smallest)
             smallest = min(smallest, abs(extreme))
             with self._lock:
                 self.velocity = _slope(times, positions, elapsed)
                 self.rho, self.pose, self.margin = target, new_pose, margin
-            feedback.progress = float(elapsed / times[-1]) if times[-1] > 0 else 1.0
-            feedback.singularity_margin = abs(margin)
-            feedback.time_from_start = duration_msg(elapsed)
-            feedback.pose = pose_msg(self.mechanism, new_pose)
-            goal_handle.publish_feedback(feedback)
+            publish_feedback(elapsed, new_pose, margin)
             if elapsed >= times[-1]:
                 break
             time.sleep(period)
-        goal_handle.succeed()
         with self._lock:
             self._holding = ""
             self._collision = None
-        result.error_code = _Result.SUCCESS
-        return self._finish(result, smallest)
+        return _SUCCEEDED, "", smallest
 
     def _follow(self, pose, rho, points, abort_margin):
         """Follow the joints from ``rho`` through ``points`` as the validator
@@ -592,22 +736,21 @@ class Rpr3Driver(Node):
         return (np.array(self.mechanism.wrap_scalar(followed)),
                 float(self.mechanism.margin(followed, points[-1])), extreme)
 
-    def _abort(self, goal_handle, result, code, reason, smallest):
+    def _conclude(self, goal_handle, ending, reason):
+        """End the goal as ``ending`` says; after an abort on the way the
+        driver holds still, and says why in its log and diagnostics."""
+        if ending == _SUCCEEDED:
+            goal_handle.succeed()
+            return
+        if ending == _CANCELED:
+            goal_handle.canceled()
+            return
         self.get_logger().warning(f"aborting the trajectory and holding still: {reason}")
-        if code in (_Result.SINGULARITY_ABORT, _Result.ASSEMBLY_MODE_LEFT,
-                    _Result.COLLISION_ABORT):
+        if ending in _HOLDING_ENDINGS:
             with self._lock:
                 self._holding = f"holding after an abort: {reason}"
         goal_handle.abort()
-        result.error_code, result.error_msg = code, reason
         self._publish_diagnostics()
-        return self._finish(result, smallest)
-
-    def _finish(self, result, smallest):
-        _, pose, margin = self.state()
-        result.final_pose = pose_msg(self.mechanism, pose)
-        result.min_singularity_margin = float(abs(margin) if smallest is None else smallest)
-        return result
 
     def prepare_shutdown(self):
         """End a trajectory in execution now (called by ``main`` on SIGINT)."""
@@ -615,4 +758,4 @@ class Rpr3Driver(Node):
 
 
 def main(args=None):
-    run(Rpr3Driver, MultiThreadedExecutor, args, usage=USAGE, num_threads=4)
+    return run(Rpr3Driver, MultiThreadedExecutor, args, usage=USAGE, num_threads=4)

@@ -14,7 +14,8 @@ planner and the driver refuse a scene for another mechanism.
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rpr3_gwr_core.world import EMPTY_SCENE, load_scene
+from rpr3_gwr_core.io.scene_file import load_scene
+from rpr3_gwr_core.world import EMPTY_SCENE
 from rpr3_gwr_msgs.msg import Scene
 from std_msgs.msg import Header
 
@@ -56,7 +57,7 @@ class ScenePublisher(Node):
         try:
             self._publish(self._read(path), path)
         except Exception as exc:  # GWRError: a bad file; anything else a bug
-            self.get_logger().error(f"not publishing {path}: {exc}")
+            self.get_logger().error(f"not publishing a scene: {exc}")
 
     @staticmethod
     def _read(path):
@@ -86,4 +87,4 @@ class ScenePublisher(Node):
 
 
 def main(args=None):
-    run(ScenePublisher, SingleThreadedExecutor, args, usage=USAGE)
+    return run(ScenePublisher, SingleThreadedExecutor, args, usage=USAGE)

@@ -9,8 +9,13 @@ waiting in the node's services are answered too, then the node is destroyed
 and the context shut down.
 
 ``-h`` or ``--help`` among the arguments (not the ROS arguments) prints the
-node's usage and exits before ``rclpy.init``: nothing joins the graph.
+node's usage and exits before ``rclpy.init``: nothing joins the graph.  A
+node that cannot start (a mechanism or scene file it cannot take, a
+parameter of the wrong type) says why in one error line and exits with
+status 1, without a traceback.
 """
+
+import os
 
 import signal
 import sys
@@ -18,10 +23,12 @@ import threading
 import time
 
 import rclpy
+from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
+from rclpy.logging import get_logger
 from rclpy.signals import SignalHandlerOptions
-from rclpy.task import Future
 from rclpy.utilities import remove_ros_args
+from rpr3_gwr_core.exceptions import GWRError
 
 __all__ = ["run", "help_requested"]
 
@@ -58,6 +65,7 @@ def run(node_type, executor_type, args=None, *, usage, **executor_options):
     """Create ``node_type()``, spin it on ``executor_type(**executor_options)``
     until SIGINT, SIGTERM or an external shutdown; with ``-h`` or ``--help``
     print ``usage`` (the node's purpose, names and parameters) and return.
+    The exit status: 0, or 1 when the node could not start.
 
     The node is created after ``rclpy.init`` and destroyed in ``finally``
     (the recorder closes its bag there), after the callbacks running in the
@@ -67,13 +75,18 @@ def run(node_type, executor_type, args=None, *, usage, **executor_options):
     """
     if help_requested(args):
         print(usage.rstrip() + "\n\n" + _ROS_ARGUMENTS, end="")
-        return
+        return 0
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     node = executor = spinner = None
-    stop, stopped = threading.Event(), Future()
+    stop, stopped = threading.Event(), threading.Event()
     previous = {number: signal.signal(number, lambda *_: stop.set()) for number in _STOP_SIGNALS}
     try:
-        node = node_type()
+        try:
+            node = node_type()
+        except (GWRError, OSError, ParameterException) as exc:
+            # What the user gave is wrong, not the program: one line, as the CLI's.
+            get_logger(os.path.basename(sys.argv[0])).error(f"cannot start: {exc}")
+            return 1
         executor = executor_type(**executor_options)
         executor.add_node(node)
         spinner = threading.Thread(target=_spin, args=(executor, stopped, stop), name="spin")
@@ -88,8 +101,8 @@ def run(node_type, executor_type, args=None, *, usage, **executor_options):
         pass
     finally:
         if spinner is not None:
-            # Completing the future ends the spin between two callbacks.
-            stopped.set_result(True)
+            stopped.set()
+            executor.wake()
             spinner.join()
         if executor is not None:
             if hasattr(node, "prepare_shutdown"):
@@ -104,11 +117,19 @@ def run(node_type, executor_type, args=None, *, usage, **executor_options):
         rclpy.try_shutdown()
         for number, handler in previous.items():
             signal.signal(number, handler)
+    return 0
 
 
 def _spin(executor, stopped, stop):
+    """Spin until ``stopped`` is set, then set ``stop``.
+
+    Not ``spin_until_future_complete``: rclpy 7.1 adds a done callback to the
+    future at each callback it runs, which a node spun for hours would hold
+    by the million.
+    """
     try:
-        executor.spin_until_future_complete(stopped)
+        while not stopped.is_set():
+            executor.spin_once(timeout_sec=_SIGNAL_PERIOD)
     except ExternalShutdownException:
         pass
     finally:

@@ -197,4 +197,4 @@ def _make_durable(writer):
 
 
 def main(args=None):
-    run(TrajectoryRecorder, SingleThreadedExecutor, args, usage=USAGE)
+    return run(TrajectoryRecorder, SingleThreadedExecutor, args, usage=USAGE)

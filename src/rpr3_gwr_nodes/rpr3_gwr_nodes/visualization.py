@@ -6,25 +6,44 @@ mechanism, where it and the platform's path are drawn; and ``joint_space``
 (:data:`JOINT_SPACE_FRAME`), the grid's plane (x, y = its two free joints,
 for the paper's slice rho2 and rho3, in joint units) of a 2-D roadmap,
 where the field maps, the roadmap and the joint path are drawn over one
-another.
+another.  :func:`joint_space_transform` places the second beside the first,
+so that one view in ``base`` shows both.
 """
 
 import numpy as np
-from geometry_msgs.msg import Point, Pose
+from geometry_msgs.msg import Point, Pose, TransformStamped
 from nav_msgs.msg import MapMetaData, OccupancyGrid
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
+from rpr3_gwr_core.world.bodies import mechanism_bodies
 
 from .profiles import BASE_FRAME
 
-__all__ = ["JOINT_SPACE_FRAME", "mechanism_points", "mechanism_markers", "field_maps",
-           "roadmap_markers", "path_markers", "margin_color", "scene_markers"]
+__all__ = ["JOINT_SPACE_FRAME", "joint_space_transform", "mechanism_points",
+           "mechanism_markers", "field_maps", "roadmap_markers", "path_markers", "margin_color",
+           "scene_markers"]
 
 JOINT_SPACE_FRAME = "joint_space"
 _BLUE = ColorRGBA(r=0.2, g=0.4, b=0.9, a=1.0)
 _GREY = ColorRGBA(r=0.5, g=0.5, b=0.5, a=1.0)
 _OBSTACLE = ColorRGBA(r=0.9, g=0.5, b=0.1, a=0.8)
 _COLLISION = ColorRGBA(r=1.0, g=0.0, b=1.0, a=1.0)
+
+
+def joint_space_transform(roadmap, stamp):
+    """The static transform from ``base`` to ``joint_space``: the joint
+    space's origin three of the mechanism's characteristic lengths
+    (:attr:`Mechanism.scale`) along base's x, unturned.
+
+    Returns
+    -------
+    geometry_msgs.msg.TransformStamped
+    """
+    transform = TransformStamped(header=Header(stamp=stamp, frame_id=BASE_FRAME),
+                                 child_frame_id=JOINT_SPACE_FRAME)
+    transform.transform.translation.x = 3.0 * float(roadmap.mechanism.scale)
+    transform.transform.rotation.w = 1.0
+    return transform
 
 
 def margin_color(margin, warn, abort):
@@ -93,8 +112,9 @@ def mechanism_markers(mechanism, pose, joints, margin, warn, abort, stamp, block
         The driver's margin thresholds.
     stamp : builtin_interfaces.msg.Time
     blocked : str, optional
-        The body (a name of ``Mechanism.bodies``, e.g. ``leg2`` or
-        ``platform``) that a collision stopped.
+        The body (a name of
+        :func:`~rpr3_gwr_core.world.bodies.mechanism_bodies`, e.g. ``leg2``
+        or ``platform``) that a collision stopped.
 
     Returns
     -------
@@ -128,8 +148,8 @@ def _blocked_body(mechanism, pose, joints, name, base, stamp):
     """The ``collision`` marker: the named body's outline, or a deletion."""
     marker = _marker(stamp, BASE_FRAME, "collision", Marker.LINE_STRIP, 0.04 * _size(base),
                      _COLLISION)
-    bodies = None if name is None else mechanism.bodies(
-        np.asarray(pose, dtype=float)[None], np.asarray(joints, dtype=float)[None])
+    bodies = None if name is None else mechanism_bodies(
+        mechanism, np.asarray(pose, dtype=float)[None], np.asarray(joints, dtype=float)[None])
     if bodies is None or name not in bodies.names:
         marker.action = Marker.DELETE
         return marker
