@@ -31,12 +31,27 @@ def roadmap_cache(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
-def full_roadmap(roadmap_cache):
-    """The full 3-DOF roadmap of the default box, from the session's cache."""
+def full_planning(roadmap_cache):
+    """The full 3-DOF roadmap of the default box and its planning index,
+    from the session's cache."""
     from rpr3_gwr_core import PAPER_GEOMETRY
-    from rpr3_gwr_core.io.cache import cached_roadmap
+    from rpr3_gwr_core.io.cache import cached_planning
     from rpr3_gwr_core.paper import FULL_BASE_GRID, FULL_REFINEMENT
 
-    roadmap, _ = cached_roadmap(PAPER_GEOMETRY, FULL_BASE_GRID, roadmap_cache,
-                                refinement=FULL_REFINEMENT)
-    return roadmap
+    roadmap, index, _ = cached_planning(PAPER_GEOMETRY, FULL_BASE_GRID, roadmap_cache,
+                                        refinement=FULL_REFINEMENT)
+    return roadmap, index
+
+
+@pytest.fixture(scope="session")
+def full_roadmap(full_planning):
+    """The full 3-DOF roadmap of the default box."""
+    return full_planning[0]
+
+
+@pytest.fixture(scope="session")
+def full_planner(full_planning):
+    """A planner on the full 3-DOF roadmap, its index built once a session."""
+    from rpr3_gwr_core.planning import Planner
+
+    return Planner(*full_planning)

@@ -3,13 +3,12 @@ the paper's 3-RPR in this process, spun by one executor thread, and the
 client spinning itself in the test's thread.  Real rclpy and Fast DDS."""
 
 import math
-import threading
 import time
 
+import numpy as np
 import pytest
 from action_msgs.msg import GoalStatus
 from builtin_interfaces.msg import Duration
-from rclpy.executors import MultiThreadedExecutor
 from rclpy.parameter import Parameter
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import Configuration, JointRange, Scene
@@ -19,6 +18,8 @@ from rpr3_gwr_nodes.planner import PlannerNode
 from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
 from rpr3_gwr_nodes.rpr3_driver import Rpr3Driver
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+from spun_nodes import SpunNodes
 
 D = math.radians
 Q1 = ({"rho1": 17.0, "rho2": 12.0, "rho3": 18.0}, D(122.82))
@@ -34,20 +35,11 @@ def suite(module_context):
                          parameter_overrides=[Parameter("plan_workers", value=0)]),
              Rpr3Driver(context=module_context,
                         parameter_overrides=[Parameter("time_scale", value=20.0)])]
-    executor = MultiThreadedExecutor(num_threads=4, context=module_context)
-    for node in nodes:
-        executor.add_node(node)
-    spinner = threading.Thread(target=executor.spin, daemon=True)
-    spinner.start()
-    client = PlannerClient(context=module_context)
+    rig = SpunNodes(module_context, nodes)
     try:
-        yield client, nodes
+        yield rig.client, nodes
     finally:
-        client.destroy_node()
-        executor.shutdown(timeout_sec=10.0)
-        spinner.join(timeout=10.0)
-        for node in reversed(nodes):
-            node.destroy_node()
+        rig.close()
 
 
 def test_ready_means_the_planner_answers_from_the_latest_roadmap(suite):
@@ -60,6 +52,17 @@ def test_ready_means_the_planner_answers_from_the_latest_roadmap(suite):
     assert response.roadmap_stamp == roadmap.header.stamp
     assert list(response.roadmap_fixed_joints) == ["rho1"]
     assert list(response.roadmap_fixed_values) == [builder.get_parameter("fixed_value").value]
+
+
+def test_limits_of_single_joints_go_by_name(suite):
+    client, _ = suite
+    client.wait_until_ready(timeout_sec=TIMEOUT)
+    response = client.plan(Q1, Q2, max_velocity=2.0, max_acceleration=4.0,
+                           joint_limits={"rho3": (0.25, 0.0)})
+    assert response.success, response.error_msg
+    velocities = np.array([p.velocities for p in response.trajectory.points])
+    assert np.max(np.abs(velocities[:, 2])) <= 0.25 + 1e-9
+    assert np.max(np.abs(velocities[:, 1])) > 0.25
 
 
 def test_a_plan_by_joint_names_reaches_the_goal(suite):
@@ -89,6 +92,19 @@ def test_a_nan_start_is_an_invalid_input_answered_not_raised(suite):
     # One limit alone: the options are the request's own.
     response = client.plan(Q1, Q2, max_velocity=1.0)
     assert response.error_code == PlanPath.Response.ERROR_INVALID_INPUT, response.error_msg
+
+
+@pytest.mark.parametrize("timeout", [math.nan, -1.0, "10", None, True])
+def test_a_timeout_that_is_not_a_number_of_seconds_is_refused_before_sending(suite, timeout):
+    client, _ = suite
+    client.wait_until_ready(timeout_sec=TIMEOUT)
+    started = time.monotonic()
+    for call in (lambda: client.plan(Q1, Q2, timeout_sec=timeout),
+                 lambda: client.reset_driver(Q1, timeout_sec=timeout),
+                 lambda: client.wait_until_ready(timeout_sec=timeout)):
+        with pytest.raises(ValueError, match="timeout_sec is a non-negative number"):
+            call()
+    assert time.monotonic() - started < 1.0
 
 
 def test_an_execution_reports_feedback_and_ends_at_the_goal(suite):

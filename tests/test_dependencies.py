@@ -39,6 +39,9 @@ SYSTEM_KEYS = {
 }
 # The modules of what requirements-system.txt names.
 SYSTEM_PIP_MODULES = {"rosbags": {"rosbags"}, "ruff": set()}
+# The ROS packages the wheels lack, built from their published definitions
+# where ROS does not install them (setup.sh).
+STANDARD_INTERFACES = WS / "standard_interfaces"
 
 
 def _requirements_module():
@@ -51,9 +54,9 @@ def _requirements_module():
 requirements = _requirements_module()
 
 
-def _depends(package):
+def _depends(package, folder=ROOT / "src"):
     """``{key: version_gte or None}`` of a package.xml's dependencies."""
-    tree = ElementTree.parse(ROOT / "src" / package / "package.xml")
+    tree = ElementTree.parse(folder / package / "package.xml")
     return {e.text.strip(): e.get("version_gte") for e in tree.getroot()
             if e.tag.endswith("depend")}
 
@@ -161,3 +164,25 @@ def test_the_installed_constraints_pin_this_interpreter_s_packages():
     constraints = requirements.installed()
     assert f"numpy=={importlib.metadata.version('numpy')}" in constraints
     assert all(Requirement(line).specifier for line in constraints)
+
+
+def test_the_standard_interfaces_are_keys_that_rosdep_installs_on_a_ros_install():
+    built = sorted(path.parent.name for path in STANDARD_INTERFACES.glob("*/package.xml"))
+    assert built == ["control_msgs", "tf2_msgs"]
+    for name in built:
+        tree = ElementTree.parse(STANDARD_INTERFACES / name / "package.xml")
+        assert tree.getroot().findtext("name") == name
+    # The nodes declare them, so rosdep installs the distro's packages; were
+    # they under src/, `rosdep install --from-paths src --ignore-src` would
+    # take them for the workspace's own and install nothing.
+    assert set(built) <= set(_depends("rpr3_gwr_nodes"))
+    in_src = {ElementTree.parse(path).getroot().findtext("name")
+              for path in (ROOT / "src").rglob("package.xml")}
+    assert in_src & set(built) == set()
+
+
+def test_the_standard_interfaces_build_on_the_pinned_wheels():
+    wheels = set(requirements.names(WS / "requirements-ros.txt"))
+    for name in sorted(path.parent.name for path in STANDARD_INTERFACES.glob("*/package.xml")):
+        for key in _depends(name, STANDARD_INTERFACES):
+            assert requirements.normalized(f"ros-{key}") in wheels, (name, key)

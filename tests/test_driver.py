@@ -1,8 +1,9 @@
 """The simulated driver on control conventions: goals validated and rejected
 when they arrive, one goal at a time, aborts that say why, diagnostics by
-margin, hostile resets and goals answered with codes.  A driver node over
-real DDS, spun by one executor thread, and a PlannerClient spinning itself
-in the test's thread."""
+margin, hostile resets answered with codes, hostile goals accepted exactly
+when the goal check (:mod:`rpr3_gwr_nodes.goal_checks`) passes them.  A
+driver node over real DDS, spun by one executor thread, and a PlannerClient
+spinning itself in the test's thread."""
 
 import collections
 import math
@@ -17,10 +18,12 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.serialization import deserialize_message, serialize_message
 from rpr3_gwr_core.mechanisms.rpr3 import ThreeRPR
 from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rpr3_gwr_msgs.msg import Configuration, PlatformPose
 from rpr3_gwr_msgs.srv import ResetDriver
+from rpr3_gwr_nodes.goal_checks import check_trajectory, trajectory_fields
 from rpr3_gwr_nodes.profiles import SENSOR_QOS
 from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
 from rpr3_gwr_nodes.rpr3_driver import Rpr3Driver
@@ -300,23 +303,40 @@ HOSTILE = [math.nan, math.inf, -math.inf, 1e308, -1e308, 1e100, 5e-324, -0.0, -1
            50.0001]
 number = st.one_of(st.floats(0.0, 50.0), st.sampled_from(HOSTILE))
 angle = st.one_of(st.floats(-math.pi, math.pi), st.sampled_from(HOSTILE))
-outcomes = collections.Counter()
+FUZZ_RESETS = FUZZ_GOALS = 150
+FUZZ_SETTINGS = settings(deadline=None, database=None,
+                         suppress_health_check=[HealthCheck.too_slow])
 
 
-@settings(max_examples=150, deadline=None, database=None,
-          suppress_health_check=[HealthCheck.too_slow])
-@given(configuration=st.one_of(st.tuples(st.just(17.0), number, number, angle),
-                               st.tuples(number, number, number, angle),
-                               st.tuples(number, angle), st.tuples(number, number, number,
-                                                                   number, angle)),
-       names=st.one_of(st.just([]), st.just([]), st.permutations(NAMES),
-                       st.lists(st.sampled_from(NAMES + ["theta1", "th1", ""]), max_size=4)))
-def test_fuzzed_resets_get_a_code(rig, configuration, names):
-    response = rig.reset(configuration, names)
-    assert response.error_code in RESET_CODES
-    assert response.success == (response.error_code == ResetDriver.Response.ERROR_NONE)
-    assert response.success or response.error_msg
-    outcomes["reset " + RESET_CODES[response.error_code]] += 1
+def _serves_a_good_goal(rig):
+    assert rig.reset(Q1).success
+    good = _line(Q1[:3], np.array(Q1[:3]) + [0.0, 0.25, 0.0], 1.0)
+    assert rig.execute(good).error_code == _Result.SUCCESS
+
+
+@pytest.mark.slow
+def test_fuzzed_resets_get_a_code_and_the_driver_serves_after(rig):
+    outcomes = collections.Counter()
+
+    @settings(FUZZ_SETTINGS, max_examples=FUZZ_RESETS)
+    @given(configuration=st.one_of(st.tuples(st.just(17.0), number, number, angle),
+                                   st.tuples(number, number, number, angle),
+                                   st.tuples(number, angle), st.tuples(number, number, number,
+                                                                       number, angle)),
+           names=st.one_of(st.just([]), st.just([]), st.permutations(NAMES),
+                           st.lists(st.sampled_from(NAMES + ["theta1", "th1", ""]),
+                                    max_size=4)))
+    def fuzz(configuration, names):
+        response = rig.reset(configuration, names)
+        assert response.error_code in RESET_CODES
+        assert response.success == (response.error_code == ResetDriver.Response.ERROR_NONE)
+        assert response.success or response.error_msg
+        outcomes[RESET_CODES[response.error_code]] += 1
+
+    fuzz()
+    print(f"\ndriver reset fuzz outcomes: {dict(sorted(outcomes.items()))}")
+    assert sum(outcomes.values()) >= FUZZ_RESETS
+    _serves_a_good_goal(rig)
 
 
 @st.composite
@@ -338,24 +358,40 @@ def goals(draw):
         for p, t in zip(points, stamps)])
 
 
-@settings(max_examples=150, deadline=None, database=None,
-          suppress_health_check=[HealthCheck.too_slow])
-@given(trajectory=goals())
-def test_fuzzed_goals_are_rejected_or_end_with_a_code(rig, trajectory):
-    if not rig.driver.state()[0].tolist() == list(Q1[:3]):
-        assert rig.reset(Q1).success
-    handle = rig.send(trajectory)
-    if not handle.accepted:
-        outcomes["goal rejected"] += 1
-        return
-    result = rig.client.get_result(handle, 60.0).result
-    assert result.error_code in RESULT_CODES
-    outcomes["goal " + RESULT_CODES[result.error_code]] += 1
+def _verdict(driver, trajectory):
+    """What the driver's goal check says of ``trajectory`` as the driver
+    receives it, from the driver's joints and parameters now."""
+    # The goal as it crosses the wire: a sec beyond int32 (3e9 s) wraps.
+    received = deserialize_message(serialize_message(trajectory), JointTrajectory)
+    return check_trajectory(
+        **trajectory_fields(received), mechanism_joints=driver.mechanism.joint_names,
+        ranges=driver.limits, max_velocity=driver.get_parameter("max_velocity").value,
+        current_joints=driver.state()[0],
+        start_tolerance=driver.get_parameter("start_tolerance").value)
 
 
-def test_the_driver_serves_after_the_fuzzing(rig):
-    print(f"\ndriver fuzz outcomes: {dict(sorted(outcomes.items()))}")
-    assert sum(outcomes.values()) >= 300
-    assert rig.reset(Q1).success
-    good = _line(Q1[:3], np.array(Q1[:3]) + [0.0, 0.25, 0.0], 1.0)
-    assert rig.execute(good).error_code == _Result.SUCCESS
+@pytest.mark.slow
+def test_fuzzed_goals_are_accepted_as_the_goal_check_says_and_end_with_a_code(rig):
+    outcomes = collections.Counter()
+
+    @settings(FUZZ_SETTINGS, max_examples=FUZZ_GOALS)
+    @given(trajectory=goals())
+    def fuzz(trajectory):
+        if not rig.driver.state()[0].tolist() == list(Q1[:3]):
+            assert rig.reset(Q1).success
+        # No goal executes between two examples: each waits for its result.
+        expected = _verdict(rig.driver, trajectory)
+        handle = rig.send(trajectory)
+        assert handle.accepted == expected.accepted, expected
+        if not handle.accepted:
+            outcomes["rejected: " + expected.code.value] += 1
+            return
+        result = rig.client.get_result(handle, 60.0).result
+        assert result.error_code in RESULT_CODES
+        assert result.error_code != _Result.INVALID_TRAJECTORY, result.error_msg
+        outcomes[RESULT_CODES[result.error_code]] += 1
+
+    fuzz()
+    print(f"\ndriver goal fuzz outcomes: {dict(sorted(outcomes.items()))}")
+    assert sum(outcomes.values()) >= FUZZ_GOALS
+    _serves_a_good_goal(rig)

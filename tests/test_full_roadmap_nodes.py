@@ -6,6 +6,7 @@ import threading
 import time
 
 import numpy as np
+import pytest
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.parameter import Parameter
 from rpr3_gwr_core import Planner
@@ -23,6 +24,7 @@ POCKET = ((27.5, 31.67154934, 2.14117832, -1.7627825445142729),
 TIMEOUT = 120.0
 
 
+@pytest.mark.slow
 def test_the_full_roadmap_decodes_from_its_messages(full_roadmap):
     decoded = roadmap_from_msgs(*roadmap_to_msgs(full_roadmap, Header(frame_id="base")))
     assert decoded.grid == full_roadmap.grid

@@ -17,11 +17,12 @@ def test_the_package_ships_the_designed_interfaces():
         ("action", "ExecuteTrajectory"),
         ("msg", "AssemblyMode"), ("msg", "AxisLinks"), ("msg", "Configuration"), ("msg", "Cusp"),
         ("msg", "FixedJoint"), ("msg", "Gate"), ("msg", "GlobalPath"), ("msg", "Grid"),
-        ("msg", "GridAxis"), ("msg", "JointRange"), ("msg", "Mechanism"),
+        ("msg", "GridAxis"), ("msg", "JointLimits"), ("msg", "JointRange"), ("msg", "Mechanism"),
         ("msg", "MechanismParameter"), ("msg", "NSolutionField"), ("msg", "Obstacle"),
         ("msg", "PlannedPath"), ("msg", "PlatformPose"), ("msg", "Scene"),
-        ("msg", "WorkspacePatch"), ("msg", "WorkspaceRoadmap"),
-        ("srv", "AssemblyModes"), ("srv", "PlanPath"), ("srv", "ResetDriver"),
+        ("msg", "WorkingMode"), ("msg", "WorkspacePatch"), ("msg", "WorkspaceRoadmap"),
+        ("srv", "AssemblyModes"), ("srv", "InverseKinematics"), ("srv", "PlanPath"),
+        ("srv", "ResetDriver"),
     ]
 
 

@@ -4,12 +4,17 @@ plans its non-singular assembly-mode change (checked by a continuation of
 the test's own) and the driver executes it; on the five-bar the planner
 refuses an assembly-mode change as FEASIBILITY_OTHER_ASPECT; on a user's
 3-RRR whose box middle cannot be assembled the nodes start from its file
-alone.  Real rclpy and
+alone, and the docs' script finds, plans and executes an assembly-mode
+change on it from a process of its own.  Real rclpy and
 Fast DDS, the nodes in this process, spun by one executor thread, and a
 PlannerClient spinning itself in the test's thread."""
 
 import math
+import os
 import pathlib
+import re
+import subprocess
+import sys
 import time
 
 import numpy as np
@@ -114,6 +119,7 @@ def _rrr(mode):
     return Configuration(joint_names=TH_NAMES, positions=list(TH), mode=mode)
 
 
+@pytest.mark.slow
 def test_the_three_rrr_changes_assembly_mode_through_the_nodes(three_rrr):
     roadmap = three_rrr.builder.roadmap
     assert roadmap.mechanism.kind == "3-RRR" and roadmap.grid.fixed == ((0, 0.0),)
@@ -248,3 +254,47 @@ def test_the_nodes_start_from_a_file_alone_where_the_box_middle_cannot_be_assemb
         assert response.success, response.error_msg
     finally:
         suite.close()
+
+
+OWN_ROBOT = pathlib.Path(__file__).resolve().parents[1] / "docs" / "howto" / "own_robot"
+OWN_JOINTS = (0.2617993877991494, -2.670353755551324, -1.6755160819145565)
+
+
+@pytest.mark.slow
+def test_the_docs_own_robot_script_changes_the_assembly_mode_it_finds(ros_context):
+    # The how-to's recipe as a user runs it: the script in a process of its
+    # own, the nodes on the user's 3-RRR file alone.
+    path = OWN_ROBOT / "user_3rrr.yaml"
+    suite = Suite(ros_context, path, "own_robot", driver=True)
+    try:
+        done = subprocess.run(
+            [sys.executable, str(OWN_ROBOT / "mode_change.py"), str(path),
+             "--joints", *map(repr, OWN_JOINTS), "--ros-args", "-r", "__ns:=/own_robot"],
+            capture_output=True, text=True, timeout=2 * TIMEOUT, env=os.environ.copy())
+        assert done.returncode == 0, done.stdout + done.stderr
+        assert "executed: error_code 0 (success)" in done.stdout
+        planned = re.search(r"planned \d+ points from mode (\S+) to (\S+)", done.stdout)
+        start, goal = float(planned[1]), float(planned[2])
+        assert abs(wrap(goal - start)) > 0.1
+        # The driver ends at the joints asked for, on the other assembly
+        # mode: the loop closes there by the file's own dimensions, on the
+        # side of the singularity the start is on.
+        robot = yaml.safe_load(path.read_text())["mechanism"]
+        bases = np.array([robot["a1"], robot["a2"], robot["a3"]], dtype=float)
+        reference = MovingBaseReference(
+            lambda th: bases + robot["l1"] * np.stack([np.cos(th), np.sin(th)], -1), None,
+            robot["l2"], robot["d1"], robot["d3"], math.radians(robot["beta_deg"]),
+            angular=True)
+        joints, pose = suite.driver.rho.copy(), suite.driver.pose.copy()
+        np.testing.assert_allclose(wrap(joints - OWN_JOINTS), 0.0, atol=1e-6)
+        assert abs(wrap(pose[2] - goal)) < 1e-3
+        assert np.max(np.abs(reference.residual(pose, joints))) < 1e-6 * reference.scale**2
+        start_pose = suite.plan(_own(start), _own(goal)).poses[0].values
+        assert np.sign(reference.margin(start_pose, np.array(OWN_JOINTS))) == np.sign(
+            reference.margin(pose, joints))
+    finally:
+        suite.close()
+
+
+def _own(mode):
+    return Configuration(joint_names=TH_NAMES, positions=list(OWN_JOINTS), mode=mode)

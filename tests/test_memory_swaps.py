@@ -23,7 +23,7 @@ from rclpy.parameter import Parameter
 from rclpy.parameter_client import AsyncParameterClient
 from rpr3_gwr_core.exceptions import GWRError
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, rho1_slice
-from rpr3_gwr_core.planning import NEVER, PlanningIndex, PlanOptions
+from rpr3_gwr_core.planning import NEVER, CellSearchIndex, PlanOptions
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
 from rpr3_gwr_nodes.client import PlannerClient, configuration
 from rpr3_gwr_nodes.plan_workers import PlanWorkers
@@ -131,6 +131,7 @@ def _settled(pids, seconds=1.0):
         time.sleep(0.1)
 
 
+@pytest.mark.slow
 def test_forty_roadmap_swaps_leave_every_process_within_20_percent(ros_context, tmp_path):
     log_path = tmp_path / "nodes.log"
     client = PlannerClient("swap_client", context=ros_context)
@@ -203,7 +204,7 @@ def test_memory_a_thread_freed_goes_back_to_the_system():
 
 def test_a_plan_error_from_a_worker_is_freed_with_its_last_reference(tmp_path):
     roadmap = build_roadmap(PAPER_GEOMETRY, rho1_slice(step=0.5))
-    workers = PlanWorkers(roadmap, PlanningIndex.build(roadmap), 1, TIMEOUT, str(tmp_path))
+    workers = PlanWorkers(roadmap, CellSearchIndex.build(roadmap), 1, TIMEOUT, str(tmp_path))
     wrong_rho1 = ((14.0, 20.0, 25.0, D(29.47)), (14.0, 20.0, 25.0, D(96.13)))
     gc.collect()
     gc.disable()

@@ -125,6 +125,7 @@ def test_a_stop_signal_taken_by_another_thread_stops_the_planner(client_node):
     assert process.returncode == 0, output
 
 
+@pytest.mark.slow
 def test_plan_workers_end_when_the_planner_is_killed(client_node):
     with _planner_process(client_node) as (process, workers, _):
         process.kill()

@@ -53,7 +53,7 @@ def test_help_after_the_ros_arguments_is_the_programs_too_a_value_is_not():
                                stderr=subprocess.STDOUT, text=True)
     lines = _Lines(process)
     try:
-        lines.wait_for("not publishing -h", TIMEOUT)
+        lines.wait_for("not publishing a scene: cannot read scene -h", TIMEOUT)
     finally:
         _stop(process)
     assert process.returncode == 0, lines.text()
@@ -124,7 +124,8 @@ def test_each_node_says_what_it_waits_for_and_when_it_is_ready():
         before = planned.wait_for("ready: serving /startup/plan_path on a roadmap of the "
                                   "3-RPR, rho1 = 17", TIMEOUT)
         assert "ready" not in before.split("waiting for a roadmap")[0]
-        driven.wait_for("ready: serving /startup/execute_trajectory and /startup/reset, "
+        driven.wait_for("ready: serving /startup/execute_trajectory, "
+                        "/startup/rpr3_driver/follow_joint_trajectory and /startup/reset, "
                         "publishing /startup/joint_states at 100 Hz", TIMEOUT)
     finally:
         for process in processes:

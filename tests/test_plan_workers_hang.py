@@ -164,6 +164,7 @@ def _check(name, load, stopped_at, reference, pid):
     assert _ended(pid), f"{name}: the stopped worker {pid} was left behind"
 
 
+@pytest.mark.slow
 def test_a_stopped_worker_holds_up_only_its_own_request(loaded_planner):
     (first, second), clients, reference = loaded_planner
     # Idle: with a queue shared by the workers, the one waiting on it holds
@@ -188,11 +189,11 @@ def test_a_worker_stopped_halfway_through_its_answer_is_found_hung(tmp_path):
     to the pipe, so the first half of a larger one is written into the
     worker's own end of its answer pipe (through /proc) before it is
     stopped."""
-    from rpr3_gwr_core.planning import PlanningIndex
+    from rpr3_gwr_core.planning import CellSearchIndex
     from rpr3_gwr_nodes.plan_workers import PlanWorkers, WorkerFailed
 
     roadmap = build_roadmap(PAPER_GEOMETRY, rho1_slice(step=0.5))
-    workers = PlanWorkers(roadmap, PlanningIndex.build(roadmap), 1, ANSWER_TIMEOUT,
+    workers = PlanWorkers(roadmap, CellSearchIndex.build(roadmap), 1, ANSWER_TIMEOUT,
                           str(tmp_path))
     worker = workers._idle.popleft()
     try:

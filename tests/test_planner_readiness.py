@@ -13,6 +13,7 @@ import subprocess
 import threading
 import time
 
+import pytest
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -98,6 +99,7 @@ def test_requests_wait_for_the_warm_up_of_each_roadmap(ros_context, monkeypatch)
             node.destroy_node()
 
 
+@pytest.mark.slow
 def test_a_first_run_says_it_compiles_before_it_is_ready(ros_context, tmp_path):
     # An empty numba cache of its own: the planner process compiles every
     # kernel, as on a fresh clone.

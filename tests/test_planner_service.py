@@ -19,8 +19,10 @@ from rclpy.parameter import Parameter
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID
 from rpr3_gwr_core.planning import Planner
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
-from rpr3_gwr_msgs.msg import AssemblyMode, Configuration, NSolutionField, WorkspaceRoadmap
-from rpr3_gwr_msgs.srv import AssemblyModes, PlanPath
+from rpr3_gwr_msgs.msg import (AssemblyMode, Configuration, JointLimits, NSolutionField,
+                               WorkspaceRoadmap)
+from rpr3_gwr_msgs.srv import AssemblyModes, InverseKinematics, PlanPath
+from rpr3_gwr_nodes.client import platform_pose
 from rpr3_gwr_nodes.conversions import roadmap_to_msgs
 from rpr3_gwr_nodes.planner import PlannerNode
 from rpr3_gwr_nodes.profiles import LATCHED_QOS
@@ -81,18 +83,27 @@ class PlannerUnderTest(SpunNodes):
 
     def call(self, request, timeout=TIMEOUT):
         """The planner's answer to ``request``, every field of it passed on."""
+        start, goal = (getattr(request, f"{end}_pose") if getattr(request, f"{end}_is_pose")
+                       else getattr(request, end) for end in ("start", "goal"))
         options = {name: getattr(request, name) for name in request.get_fields_and_field_types()
-                   if name not in ("start", "goal")}
-        return self.client.plan(request.start, request.goal, timeout_sec=timeout, **options)
+                   if not name.startswith(("start", "goal")) or name.endswith("working_mode")}
+        return self.client.plan(start, goal, timeout_sec=timeout, **options)
 
     def plan(self, start, goal, **options):
-        return self.call(PlanPath.Request(start=_configuration(start), goal=_configuration(goal),
-                                          **options))
+        """Plan between configurations (None: the end is a pose of ``options``)."""
+        ends = {name: _configuration(end) for name, end in (("start", start), ("goal", goal))
+                if end is not None}
+        return self.call(PlanPath.Request(**ends, **options))
 
     def default_limits(self):
-        """The limits that time requests without their own."""
-        return tuple(self.planner.get_parameter(name).value
-                     for name in ("default_max_velocity", "default_max_acceleration"))
+        """The limits of each joint that time requests without their own:
+        the planner's ``joint_limits.<joint>.*`` parameters where nonzero,
+        else its defaults; arrays of velocities and accelerations in the
+        3-RPR's joint order."""
+        return tuple(np.array([self.planner.get_parameter(f"joint_limits.{joint}.{kind}").value
+                               or self.planner.get_parameter(f"default_{kind}").value
+                               for joint in NAMES])
+                     for kind in ("max_velocity", "max_acceleration"))
 
 
 @pytest.fixture(scope="module")
@@ -110,8 +121,9 @@ def _seconds(point):
 
 def check_sound(request, response, stamp, default_limits):
     """The contract of every answer (the fuzz test's assertions); requests
-    without limits are timed with ``default_limits``, the planner's
-    ``default_max_velocity`` and ``default_max_acceleration``."""
+    without limits for all joints are timed with ``default_limits`` (per
+    joint, :meth:`PlannerUnderTest.default_limits`), and the limits of single
+    joints replace those where nonzero."""
     assert response.error_code in CODES, response.error_code
     if response.error_code != PlanPath.Response.ERROR_NO_ROADMAP:
         assert response.roadmap_stamp == stamp.stamp
@@ -135,9 +147,17 @@ def check_sound(request, response, stamp, default_limits):
     assert list(response.trajectory.joint_names) == NAMES
     nanoseconds = [p.time_from_start.sec * 10**9 + p.time_from_start.nanosec for p in points]
     assert nanoseconds[0] == 0 and all(b > a for a, b in zip(nanoseconds, nanoseconds[1:]))
-    start, goal = request.start, request.goal
-    np.testing.assert_allclose(points[0].positions, _joints(start), rtol=0, atol=1e-9)
-    np.testing.assert_allclose(points[-1].positions, _joints(goal), rtol=0, atol=1e-9)
+    for end, point in (("start", points[0]), ("goal", points[-1])):
+        if getattr(request, f"{end}_is_pose"):
+            pose = getattr(request, f"{end}_pose").pose
+            # The legs that place the pose, to the validator's continuation.
+            joints = legs_of((pose.position.x, pose.position.y,
+                              2 * math.atan2(pose.orientation.z, pose.orientation.w)))
+            np.testing.assert_allclose(point.positions, joints, rtol=0, atol=1e-6)
+            assert getattr(response, f"{end}_working_mode") == "+++"
+        else:
+            np.testing.assert_allclose(point.positions, _joints(getattr(request, end)), rtol=0,
+                                       atol=1e-9)
     # A second, independent continuation, in pose space, follows the
     # trajectory from the pose it starts at to the one it ends at, keeping
     # one sign of det Jx and the planner's margin threshold.
@@ -151,9 +171,13 @@ def check_sound(request, response, stamp, default_limits):
     # The limits hold between the points, for a driver moving each joint
     # linearly from point to point: the joint change over each interval, and
     # the change of the point velocities over it.
-    max_velocity, max_acceleration = default_limits
+    max_velocity, max_acceleration = (np.array(v, dtype=float) for v in default_limits)
     if request.max_velocity > 0:
-        max_velocity, max_acceleration = request.max_velocity, request.max_acceleration
+        max_velocity[:], max_acceleration[:] = request.max_velocity, request.max_acceleration
+    for entry in request.joint_limits:
+        joint = NAMES.index(entry.joint_name)
+        max_velocity[joint] = entry.max_velocity or max_velocity[joint]
+        max_acceleration[joint] = entry.max_acceleration or max_acceleration[joint]
     interval = np.diff(nanoseconds)[:, None] * 1e-9
     rounding = 1 + 1e-9
     assert np.all(np.abs(np.diff(numbers[:, :3], axis=0)) / interval
@@ -229,6 +253,125 @@ def test_no_limits_take_the_default_limits_as_the_interface_says(service):
     assert _seconds(points[-1]) > 0
     speed = max(abs(v) for p in points for v in p.velocities)
     assert 0 < speed <= service.planner.get_parameter("default_max_velocity").value + 1e-9
+
+
+def test_limits_of_single_joints_hold_each_for_its_joint(service):
+    request = PlanPath.Request(start=_configuration(Q1), goal=_configuration(Q2), smooth=True,
+                               max_velocity=2.0, max_acceleration=4.0, joint_limits=[
+                                   JointLimits(joint_name="rho3", max_velocity=0.25),
+                                   JointLimits(joint_name="rho2", max_acceleration=0.5)])
+    response = service.call(request)
+    assert response.success, response.error_msg
+    check_sound(request, response, service.stamp, service.default_limits())
+    fast = service.plan(Q1, Q2, smooth=True, max_velocity=2.0, max_acceleration=4.0)
+    assert _seconds(response.trajectory.points[-1]) > _seconds(fast.trajectory.points[-1])
+
+
+def test_the_joint_limit_parameters_time_requests_without_limits(service):
+    node = service.planner
+    try:
+        assert not node.set_parameters([Parameter("joint_limits.rho2.max_velocity",
+                                                  value=-1.0)])[0].successful
+        assert node.set_parameters([Parameter("joint_limits.rho2.max_velocity",
+                                              value=0.125)])[0].successful
+        request = PlanPath.Request(start=_configuration(Q1), goal=_configuration(Q2))
+        response = service.call(request)
+        assert response.success, response.error_msg
+        check_sound(request, response, service.stamp, service.default_limits())
+        # rho2 moves 2 at most 0.125 a second.
+        assert _seconds(response.trajectory.points[-1]) >= 2 / 0.125
+    finally:
+        node.set_parameters([Parameter("joint_limits.rho2.max_velocity", value=0.0)])
+
+
+@pytest.mark.parametrize("entries", [[JointLimits(joint_name="th1", max_velocity=1.0)],
+                                     [JointLimits(joint_name="rho2", max_velocity=1.0)] * 2,
+                                     [JointLimits(joint_name="rho2", max_velocity=math.nan)],
+                                     [JointLimits(joint_name="rho2", max_acceleration=-1.0)]])
+def test_limits_of_unknown_repeated_or_bad_joints_are_an_invalid_input(service, entries):
+    response = service.plan(Q1, Q2, joint_limits=entries)
+    assert response.error_code == PlanPath.Response.ERROR_INVALID_INPUT, response.error_msg
+    assert "joint_limits" in response.error_msg
+
+
+# The paper's first example as poses: B1 [length unit] and alpha [rad] of the
+# legs (17, 12, 18) and (17, 10, 25).
+START_POSE = (14.2844098014, -9.21713820156, D(122.818069928))
+GOAL_POSE = (0.329281929849, 16.9968106835, D(-24.2435688728))
+
+
+def test_ends_given_as_poses_plan_between_the_legs_that_place_them(service):
+    request = PlanPath.Request(start_is_pose=True, start_pose=platform_pose(*START_POSE),
+                               goal_is_pose=True, goal_pose=platform_pose(*GOAL_POSE))
+    response = service.call(request)
+    assert response.success, response.error_msg
+    # The independent continuation follows it, within the default limits.
+    check_sound(request, response, service.stamp, service.default_limits())
+    # The 3-RPR has one working mode.
+    assert (response.start_working_mode, response.goal_working_mode) == ("+++", "+++")
+    points = response.trajectory.points
+    np.testing.assert_allclose(points[0].positions, legs_of(START_POSE), atol=1e-6)
+    np.testing.assert_allclose(points[-1].positions, legs_of(GOAL_POSE), atol=1e-6)
+    np.testing.assert_allclose(response.poses[-1].values[:2], GOAL_POSE[:2], atol=1e-6)
+    joints = service.plan(Q1, Q2)
+    assert joints.success and not joints.start_working_mode
+
+
+def test_inverse_kinematics_gives_the_legs_of_a_pose_and_its_patch(service):
+    response = service.client.inverse_kinematics(platform_pose(*START_POSE))
+    assert response.success, response.error_msg
+    (mode,) = response.modes
+    assert mode.working_mode == "+++" and mode.in_box and mode.on_slice and mode.located
+    np.testing.assert_allclose(mode.configuration.positions, legs_of(START_POSE), atol=1e-9)
+    assert abs(math.remainder(mode.configuration.mode - START_POSE[2], 2 * math.pi)) < 1e-12
+    assert mode.aspect == np.sign(margin_of(START_POSE)) == np.sign(mode.signed_margin)
+    off_slice = service.client.inverse_kinematics(platform_pose(5.0, 5.0, 0.0))
+    assert off_slice.success and not off_slice.modes[0].on_slice
+    assert not off_slice.modes[0].located
+
+
+def _tilted(pose, **fields):
+    msg = platform_pose(*pose)
+    for name, value in fields.items():
+        target, attribute = name.split("_")
+        setattr(getattr(msg.pose, target), attribute, value)
+    return msg
+
+
+@pytest.mark.parametrize("pose", [
+    _tilted(START_POSE, position_z=1.0), _tilted(START_POSE, orientation_x=0.5),
+    _tilted(START_POSE, position_x=math.nan), _tilted(START_POSE, orientation_w=2.0)])
+def test_a_pose_off_the_base_plane_is_an_invalid_input(service, pose):
+    response = service.client.inverse_kinematics(pose)
+    assert response.error_code == InverseKinematics.Response.ERROR_INVALID_INPUT
+    planned = service.plan(None, Q2, start_is_pose=True, start_pose=pose)
+    assert planned.error_code == PlanPath.Response.ERROR_INVALID_INPUT, planned.error_msg
+
+
+def test_a_pose_in_another_frame_is_refused_and_the_base_frame_may_be_empty(service):
+    pose = platform_pose(*START_POSE)
+    pose.header.frame_id = "map"
+    response = service.plan(None, Q2, start_is_pose=True, start_pose=pose)
+    assert response.error_code == PlanPath.Response.ERROR_INVALID_INPUT
+    assert "frame" in response.error_msg
+    pose.header.frame_id = ""
+    assert service.plan(None, Q2, start_is_pose=True, start_pose=pose).success
+
+
+def test_a_pose_off_the_slice_is_infeasible_and_says_why(service):
+    response = service.plan(Q1, None, goal_is_pose=True,
+                            goal_pose=platform_pose(5.0, 5.0, 0.0))
+    assert response.error_code == PlanPath.Response.ERROR_INFEASIBLE, response.error_msg
+    assert response.feasibility == PlanPath.Response.FEASIBILITY_UNREACHABLE
+    assert "off the slice" in response.error_msg
+
+
+def test_a_working_mode_without_a_pose_or_not_one_sign_per_leg_is_an_invalid_input(service):
+    assert service.plan(Q1, Q2, start_working_mode="+++").error_code == \
+        PlanPath.Response.ERROR_INVALID_INPUT
+    response = service.plan(None, Q2, start_is_pose=True,
+                            start_pose=platform_pose(*START_POSE), start_working_mode="+x")
+    assert response.error_code == PlanPath.Response.ERROR_INVALID_INPUT, response.error_msg
 
 
 def test_the_response_names_the_roadmap_that_answered(service):
@@ -345,31 +488,70 @@ def limits(draw):
 
 
 @st.composite
+def joint_limits(draw):
+    """None mostly; else up to four entries of the joints or others, with
+    sound, zero or hostile values."""
+    if draw(st.integers(0, 3)):
+        return []
+    value = st.one_of(st.just(0.0), st.floats(1e-2, 1e2), st.floats(1e-2, 1e2), hostile)
+    return draw(st.lists(st.builds(JointLimits,
+                                   joint_name=st.sampled_from(NAMES + NAMES + ["th1", ""]),
+                                   max_velocity=value, max_acceleration=value), max_size=2,
+                         unique_by=lambda entry: entry.joint_name))
+
+
+@st.composite
+def pose_messages(draw):
+    """The paper's example poses, poses of drawn or hostile numbers, in
+    the base frame or not, turned about z or not."""
+    pose = draw(st.one_of(st.sampled_from([START_POSE, GOAL_POSE]),
+                          st.tuples(leg, leg, st.floats(-4.0, 4.0))))
+    msg = platform_pose(*pose)
+    if not draw(st.integers(0, 4)):
+        msg.pose.orientation.w = draw(hostile)
+    if not draw(st.integers(0, 4)):
+        msg.header.frame_id = draw(st.sampled_from(["", "map", "base_link"]))
+    if not draw(st.integers(0, 4)):
+        msg.pose.position.z = draw(hostile)
+        msg.pose.orientation.x = draw(hostile)
+    return msg
+
+
+@st.composite
 def requests(draw):
     max_velocity, max_acceleration = draw(limits())
+    ends = {}
+    for end in ("start", "goal"):
+        if draw(st.integers(0, 3)):
+            ends[end] = draw(configuration_messages())
+        else:
+            ends.update({f"{end}_is_pose": True, f"{end}_pose": draw(pose_messages())})
+        if not draw(st.integers(0, 9)):
+            ends[f"{end}_working_mode"] = draw(st.sampled_from(["+++", "+++", "-++", "x"]))
     return PlanPath.Request(
-        start=draw(configuration_messages()), goal=draw(configuration_messages()),
+        **ends,
         mode_tolerance=draw(st.one_of(st.just(0.0), st.just(0.0), st.floats(1e-4, 0.2),
                                        hostile)),
         smooth=draw(st.booleans()), weighted=draw(st.booleans()),
         feasibility_only=draw(st.booleans()),
         max_velocity=max_velocity, max_acceleration=max_acceleration,
+        joint_limits=draw(joint_limits()),
         time_limit=draw(st.one_of(st.just(0.0), st.just(0.0), st.floats(1e-4, 1.0), hostile)))
 
 
-outcomes = collections.Counter()
+@pytest.mark.slow
+def test_fuzzed_requests_get_sound_answers_and_the_node_answers_a_good_one_after(service):
+    outcomes = collections.Counter()
 
+    @settings(max_examples=FUZZ_REQUESTS, deadline=None, database=None,
+              suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+    @given(request=requests())
+    def fuzz(request):
+        response = service.call(request)
+        outcomes[CODES[response.error_code]] += 1
+        check_sound(request, response, service.stamp, service.default_limits())
 
-@settings(max_examples=FUZZ_REQUESTS, deadline=None, database=None,
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
-@given(request=requests())
-def test_fuzzed_requests_get_sound_answers(service, request):
-    response = service.call(request)
-    outcomes[CODES[response.error_code]] += 1
-    check_sound(request, response, service.stamp, service.default_limits())
-
-
-def test_the_node_answers_a_good_request_after_the_fuzzing(service):
+    fuzz()
     print(f"\nplan_path fuzz outcomes over {sum(outcomes.values())} requests: "
           f"{dict(sorted(outcomes.items()))}")
     assert sum(outcomes.values()) >= FUZZ_REQUESTS
@@ -398,7 +580,7 @@ def _positions(response):
     return np.array([p.positions for p in response.trajectory.points])
 
 
-@pytest.mark.parametrize("count", [0, 2])
+@pytest.mark.parametrize("count", [0, pytest.param(2, marks=pytest.mark.slow)])
 def test_plans_from_workers_and_from_the_node_are_the_same(ros_context, count):
     earlier = children()
     # A namespace of its own: the module's planner would also take this
@@ -422,6 +604,7 @@ def test_plans_from_workers_and_from_the_node_are_the_same(ros_context, count):
         service.close()
 
 
+@pytest.mark.slow
 def test_killed_plan_workers_leave_the_node_planning_in_its_own_process(ros_context):
     earlier = children()
     service = PlannerUnderTest(ros_context, "killed_workers", parameter_overrides=[
@@ -523,6 +706,7 @@ def mode_requests(draw):
     return joints, start, tolerance
 
 
+@pytest.mark.slow
 @settings(max_examples=MODES_FUZZ_REQUESTS, deadline=None, database=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 @given(request=mode_requests())

@@ -15,6 +15,7 @@ from rclpy.parameter import Parameter
 from rpr3_gwr_msgs.msg import NSolutionField
 from rpr3_gwr_nodes.profiles import LATCHED_QOS
 from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
+from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
 
 TIMEOUT = 60.0
@@ -30,6 +31,10 @@ class BuilderUnderTest:
         self.listener = Node("field_listener", context=context)
         self.fields, self.arrived = [], threading.Event()
         self.listener.create_subscription(NSolutionField, "field", self._keep, LATCHED_QOS)
+        self.static_transforms = []
+        self.listener.create_subscription(TFMessage, "/tf_static",
+                                          lambda msg: self.static_transforms.append(msg),
+                                          LATCHED_QOS)
         self.executor = MultiThreadedExecutor(context=context)
         self.executor.add_node(self.builder)
         self.executor.add_node(self.listener)
@@ -54,6 +59,19 @@ def rig(ros_context):
         yield running
     finally:
         running.close()
+
+
+def test_the_joint_space_frame_is_placed_beside_the_base_on_tf_static(rig):
+    assert rig.arrived.wait(TIMEOUT), "no field published"
+    deadline = time.monotonic() + TIMEOUT
+    while not rig.static_transforms:
+        assert time.monotonic() < deadline, "nothing on /tf_static"
+        time.sleep(0.02)
+    (transform,) = rig.static_transforms[-1].transforms
+    assert (transform.header.frame_id, transform.child_frame_id) == ("base", "joint_space")
+    # Three times the paper's platform's longest side, d3 = 20.84.
+    assert transform.transform.translation.x == pytest.approx(3 * 20.84)
+    assert transform.transform.rotation.w == 1.0
 
 
 def test_builder_rebuilds_on_rho1_and_refuses_bad_grids(rig):

@@ -11,7 +11,6 @@ import time
 
 import numpy as np
 import pytest
-from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from rosbags.rosbag2 import Reader
@@ -22,7 +21,6 @@ from rpr3_gwr_msgs.action import ExecuteTrajectory
 from rclpy.serialization import deserialize_message
 from rpr3_gwr_msgs.msg import Configuration, NSolutionField, PlannedPath, WorkspaceRoadmap
 from rpr3_gwr_msgs.srv import PlanPath
-from rpr3_gwr_nodes.client import PlannerClient
 from rpr3_gwr_nodes.planner import PlannerNode
 from rpr3_gwr_nodes.profiles import LATCHED_QOS, SERVICE_QOS
 from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
@@ -31,6 +29,8 @@ from rpr3_gwr_nodes.trajectory_recorder import TrajectoryRecorder
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+from spun_nodes import SpunNodes
 
 D = math.radians
 Q1, Q2 = (17.0, 12.0, 18.0, D(122.82)), (17.0, 10.0, 25.0, D(-24.24))
@@ -79,7 +79,7 @@ def _handshake(client, request, attempts=3, timeout=10.0):
     raise AssertionError(f"no answer to {attempts} first requests")
 
 
-class Suite:
+class Suite(SpunNodes):
     """All nodes of the suite and a listener of the joint states, spun by one
     executor thread, and a client."""
 
@@ -96,15 +96,8 @@ class Suite:
         self.joint_states = []
         self.listener.create_subscription(JointState, "joint_states", self.joint_states.append,
                                           qos_profile_sensor_data)
-        # Nodes added by tests; destroyed only after the executor stops, since
-        # destroying a node while another thread spins can break its wait set.
-        self.extra_nodes = []
-        self.executor = MultiThreadedExecutor(num_threads=6, context=context)
-        for node in (self.builder, self.planner, self.driver, self.recorder, self.listener):
-            self.executor.add_node(node)
-        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
-        self.thread.start()
-        self.client = PlannerClient("suite_test_client", context=context)
+        super().__init__(context, (self.builder, self.planner, self.driver, self.recorder,
+                                   self.listener), "suite_test_client", num_threads=6)
         assert self.planner.ready.wait(120.0), "the planner got no roadmap"
         self.client.wait_until_ready(timeout_sec=TIMEOUT)
 
@@ -117,19 +110,6 @@ class Suite:
 
     def execute(self, trajectory):
         return self.client.execute(trajectory, timeout_sec=120.0).result
-
-    def add(self, node):
-        self.extra_nodes.append(node)
-        self.executor.add_node(node)
-        return node
-
-    def close(self):
-        self.client.destroy_node()
-        self.executor.shutdown(timeout_sec=10.0)
-        self.thread.join(timeout=10.0)
-        for node in (*self.extra_nodes, self.listener, self.recorder, self.driver, self.planner,
-                     self.builder):
-            node.destroy_node()
 
 
 @pytest.fixture(scope="module")

@@ -107,7 +107,8 @@ def test_a_node_that_dies_makes_the_launcher_fail_naming_it(tmp_path):
         output = log_path.read_text()
         assert code != 0, output
         # The node's own error, prefixed with its name, and the launcher's word.
-        assert "[planner] FileNotFoundError" in output, output
+        assert "[planner] [ERROR]" in output and "cannot start: " in output, output
+        assert "missing.yaml" in output and "Traceback" not in output, output
         assert "[suite] planner exited on its own with status 1" in output, output
     finally:
         _stop(launcher)

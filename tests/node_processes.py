@@ -1,0 +1,37 @@
+"""The suite's nodes as processes, as a user runs them."""
+
+import contextlib
+import os
+import pathlib
+import subprocess
+
+__all__ = ["LIB", "node_processes"]
+
+LIB = pathlib.Path(__file__).resolve().parents[1] / "ros2_ws" / "install" / "rpr3_gwr_nodes" \
+    / "lib" / "rpr3_gwr_nodes"
+
+
+@contextlib.contextmanager
+def node_processes(folder, nodes, namespace):
+    """Run each ``(executable, parameters)`` of ``nodes`` (parameters as
+    ``NAME:=VALUE`` strings) in ``namespace``, logging to
+    ``folder / "<executable>.log"``; SIGTERM them on exit, SIGKILL those
+    still running 30 s later."""
+    processes = []
+    try:
+        for name, parameters in nodes:
+            with open(folder / f"{name}.log", "wb") as log:
+                processes.append(subprocess.Popen(
+                    [str(LIB / name), "--ros-args", "-r", f"__ns:=/{namespace}",
+                     *(a for p in parameters for a in ("-p", p))],
+                    env=os.environ.copy(), stdout=log, stderr=subprocess.STDOUT))
+        yield processes
+    finally:
+        for process in processes:
+            process.terminate()
+        for process in processes:
+            try:
+                process.wait(timeout=30.0)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait(timeout=30.0)
