@@ -28,7 +28,7 @@ import numpy as np
 from rpr3_gwr_core import GWRError, PAPER_GEOMETRY, Planner
 from rpr3_gwr_core.io.cache import cached_planning
 from rpr3_gwr_core.paper import FULL_BASE_GRID, FULL_REFINEMENT
-from rpr3_gwr_core.planning import planning_index
+from rpr3_gwr_core.planning import build_cell_search_index
 
 from bench_roadmap import THREADS  # bench/ is the script's folder
 
@@ -103,7 +103,7 @@ def main():
     print(json.dumps({"stage": "planner set-up", "seconds":
                       round(time.perf_counter() - start, 2)}))
     start = time.perf_counter()
-    planning_index(roadmap)
+    build_cell_search_index(roadmap)
     print(json.dumps({"stage": "planning index built again (gate distances, node costs)",
                       "seconds": round(time.perf_counter() - start, 2)}))
     rows, signs = _configurations(8 * args.pairs, args.seed)

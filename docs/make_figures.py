@@ -283,7 +283,7 @@ def cli_help(folder):
     columns = os.environ.get("COLUMNS")
     os.environ["COLUMNS"] = "88"
     try:
-        for command in ("", "dk", "roadmap", "plan", "plot", "cusps"):
+        for command in ("", "dk", "ik", "roadmap", "plan", "plot", "cusps"):
             text = io.StringIO()
             with contextlib.redirect_stdout(text), contextlib.suppress(SystemExit):
                 cli([command, "--help"] if command else ["--help"])
@@ -304,9 +304,9 @@ def main(folder):
     folder : str
         Output folder; existing figures are replaced.
     """
-    from rpr3_gwr_core.io.figures import field_figure, plan_figure, roadmap_figure
+    from rpr3_gwr_core.figures import field_figure, plan_figure, roadmap_figure
     from rpr3_gwr_core.planning import DEFAULT_CLEARANCE, PlanOptions
-    from rpr3_gwr_core.world import load_scene
+    from rpr3_gwr_core.io.scene_file import load_scene
 
     os.makedirs(folder, exist_ok=True)
     roadmap, planner = _paper_setting()
@@ -331,7 +331,7 @@ def overview(folder):
     """Write the README's figure, ``overview.png``: the paper's first example
     over the n-solution field and on its solution sheets."""
     roadmap, planner = _paper_setting()
-    from rpr3_gwr_core.io.figures import plan_figure
+    from rpr3_gwr_core.figures import plan_figure
     from rpr3_gwr_core.planning import PlanOptions
 
     plan = planner.plan(_radians(EXAMPLE_1[0]), _radians(EXAMPLE_1[1]), PlanOptions(smooth=True))

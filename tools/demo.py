@@ -51,7 +51,7 @@ from rcl_interfaces.srv import SetParameters  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from rclpy.wait_for_message import wait_for_message  # noqa: E402
 from rosbags.rosbag2 import Reader  # noqa: E402
-from rpr3_gwr_core.io.figures import field_figure, plan_figure, roadmap_figure  # noqa: E402
+from rpr3_gwr_core.figures import field_figure, plan_figure, roadmap_figure  # noqa: E402
 from rpr3_gwr_core.io.mechanism_file import load_mechanism_file  # noqa: E402
 from rpr3_gwr_core.planning.validation import validate_path  # noqa: E402
 from rpr3_gwr_msgs.msg import NSolutionField  # noqa: E402
