@@ -8,6 +8,7 @@ own direct kinematics.
 """
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -185,6 +186,19 @@ def test_a_leg_out_of_reach_removes_only_the_modes_that_need_it():
     legs = DEFAULT_THREE_RRR.leg_joints(np.array(pose))
     assert np.all(np.isnan(legs[0])) and np.all(np.isfinite(legs[1:]))
     assert np.all(np.isnan(DEFAULT_THREE_RRR.inverse_kinematics(pose)))
+
+
+@pytest.mark.parametrize("kind", ["3-RRR", "5R"])
+@pytest.mark.parametrize("offset", [0.0, 5e-324, 1e-310])
+def test_a_point_on_a_revolute_joint_is_out_of_reach_without_a_warning(kind, offset):
+    # |AB| = 0, or a distance whose cosine overflows: no angle reaches B
+    # (the links differ in length), and nothing is raised or warned.
+    pose = np.zeros(len(POSES[kind]))
+    pose[1] = offset
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        legs = MECHANISMS[kind].leg_joints(pose)
+    assert np.all(np.isnan(legs[0]))
 
 
 @pytest.mark.parametrize("kind", sorted(MECHANISMS))

@@ -155,7 +155,9 @@ def revolute_leg_angles(base, point, proximal, distal):
     """
     reach = np.asarray(point, dtype=float) - np.asarray(base, dtype=float)
     length = np.hypot(reach[..., 0], reach[..., 1])
-    with np.errstate(divide="ignore", invalid="ignore"):
+    # A length of 0, or so small that the quotient overflows, gives an
+    # infinite or NaN cosine: not reached.
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         cosine = (proximal * proximal + length * length - distal * distal) / (
             2.0 * proximal * length)
     reached = np.abs(cosine) <= 1.0 + _REACH_ROUNDING
