@@ -54,7 +54,7 @@ def resident_mb():
     return float("nan")
 
 
-def _pairs(roadmap, restricted, rng, count):
+def free_pairs(roadmap, restricted, rng, count):
     """Same-aspect pairs of patch solutions the scene leaves free, as
     configurations (joints, then the mode coordinate)."""
     seg = roadmap.segmentation
@@ -129,7 +129,7 @@ def run(name, roadmap, index, args, example):
     planner = Planner(roadmap, index)
     planner.warm_up()
     in_scene = planner.apply_scene(scene)
-    pairs = _pairs(roadmap, in_scene, np.random.default_rng(args.seed + 1), args.pairs)
+    pairs = free_pairs(roadmap, in_scene, np.random.default_rng(args.seed + 1), args.pairs)
     _plan_times(planner, pairs[:3], in_scene)  # the scene's kernels load
     empty, empty_ok = _plan_times(planner, pairs, None)
     scened, scened_ok = _plan_times(planner, pairs, in_scene)
