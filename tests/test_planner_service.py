@@ -17,14 +17,14 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID
-from rpr3_gwr_core.planning import Planner
+from rpr3_gwr_core.planning import Planner, PlanStatus
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
 from rpr3_gwr_msgs.msg import (AssemblyMode, Configuration, JointLimits, NSolutionField,
                                WorkspaceRoadmap)
 from rpr3_gwr_msgs.srv import AssemblyModes, InverseKinematics, PlanPath
 from rpr3_gwr_nodes.client import platform_pose
 from rpr3_gwr_nodes.conversions import roadmap_to_msgs
-from rpr3_gwr_nodes.planner import PlannerNode
+from rpr3_gwr_nodes.planner import PLAN_STATUS, PlannerNode
 from rpr3_gwr_nodes.profiles import LATCHED_QOS
 from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
@@ -132,12 +132,19 @@ def check_sound(request, response, stamp, default_limits):
     if not response.success:
         assert response.error_code != PlanPath.Response.ERROR_NONE and response.error_msg
         assert not response.trajectory.points
+        assert response.plan_status == PlanPath.Response.PLAN_STATUS_NONE
         return
     assert response.error_code == PlanPath.Response.ERROR_NONE and not response.error_msg
     points = response.trajectory.points
     if request.feasibility_only:
         assert not points and response.global_paths
+        assert response.plan_status == PlanPath.Response.PLAN_STATUS_NONE
         return
+    # Approximate exactly when the time limit skipped a step.
+    assert response.plan_status == (
+        PlanPath.Response.PLAN_STATUS_APPROXIMATE_SOLUTION if response.skipped_steps
+        else PlanPath.Response.PLAN_STATUS_EXACT_SOLUTION)
+    assert set(response.skipped_steps) <= {"pulling taut", "rounding"}
     assert len(points) >= 1 and len(response.poses) == len(points)
     numbers = np.array([list(p.positions) + list(p.velocities) + list(p.accelerations)
                         for p in points])
@@ -193,6 +200,15 @@ def test_tiny_limits_are_an_invalid_input_and_the_node_still_serves(service, lim
     response = service.plan(Q1, Q2, max_velocity=limit, max_acceleration=limit)
     assert response.error_code == PlanPath.Response.ERROR_INVALID_INPUT, response.error_msg
     assert service.plan(Q1, Q2).success
+
+
+def test_a_plan_given_time_is_an_exact_solution_and_every_status_has_a_constant(service):
+    response = service.plan(Q1, Q2)
+    assert response.success, response.error_msg
+    assert response.plan_status == PlanPath.Response.PLAN_STATUS_EXACT_SOLUTION
+    assert list(response.skipped_steps) == []
+    assert set(PLAN_STATUS) == set(PlanStatus)
+    assert len(set(PLAN_STATUS.values())) == len(PlanStatus)
 
 
 def test_a_passed_time_limit_is_a_timeout_and_the_node_serves_on(service):

@@ -78,7 +78,7 @@ from rpr3_gwr_core.io.cache import find_cached_planning
 from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
 from rpr3_gwr_core.io.paths import default_cache_dir
 from rpr3_gwr_core.planning import (DEFAULT_CLEARANCE, CellSearchIndex, PlanOptions, Planner,
-                                    PoseEnd, Retries, Termination, assembly_modes,
+                                    PlanStatus, PoseEnd, Retries, Termination, assembly_modes,
                                     build_cell_search_index, resolve_ends, working_modes)
 from rpr3_gwr_msgs.msg import (AssemblyMode, Configuration, GlobalPath, NSolutionField,
                                PlannedPath, Scene, WorkspaceRoadmap)
@@ -147,6 +147,10 @@ FEASIBILITY = {
     # by the scene.
     "same_part": PlanPath.Response.FEASIBILITY_SAME_PATCH,
     "blocked": PlanPath.Response.FEASIBILITY_BLOCKED,
+}
+PLAN_STATUS = {
+    PlanStatus.EXACT_SOLUTION: PlanPath.Response.PLAN_STATUS_EXACT_SOLUTION,
+    PlanStatus.APPROXIMATE_SOLUTION: PlanPath.Response.PLAN_STATUS_APPROXIMATE_SOLUTION,
 }
 
 
@@ -686,6 +690,8 @@ class PlannerNode(Node):
                                                      self._header())
             response.poses = [pose_msg(mechanism, p) for p in plan.poses]
             response.min_singularity_margin = float(plan.validation.min_margin)
+            response.plan_status = PLAN_STATUS[plan.status]
+            response.skipped_steps = list(plan.skipped)
         response.success = True
         response.error_code = PlanPath.Response.ERROR_NONE
         # Converting messages for no one would cost every request.
