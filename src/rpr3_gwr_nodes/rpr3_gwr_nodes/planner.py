@@ -710,52 +710,45 @@ class PlannerNode(Node):
         return Header(stamp=self.get_clock().now().to_msg(), frame_id=BASE_FRAME)
 
     def _on_assembly_modes(self, request, response):
-        state = self._state
-        try:
-            if state is None:
-                return _failed(response, AssemblyModes.Response.ERROR_NO_ROADMAP,
-                               "no roadmap received yet on 'field' and 'roadmap'")
-            planner = state.planner
+        def fill(planner):
             mechanism = planner.roadmap.mechanism
             *joints, mode = configuration_from_msg(mechanism, request.joints)
-            tolerance = request.mode_tolerance or None
             modes = assembly_modes(planner, joints, mode if request.with_start else None,
-                                   tolerance)
+                                   request.mode_tolerance or None)
             response.modes = [_assembly_mode_msg(mechanism, m) for m in modes]
-            response.success = True
-            response.error_code = AssemblyModes.Response.ERROR_NONE
-            return response
-        except GWRError as exc:
-            code = getattr(AssemblyModes.Response, f"ERROR_{exc.code}",
-                           AssemblyModes.Response.ERROR_INTERNAL)
-            return _failed(AssemblyModes.Response(), code, str(exc))
-        except Exception as exc:  # a bug must not take the service down
-            self.get_logger().error(f"internal error on an assembly modes request: {exc!r}")
-            return _failed(AssemblyModes.Response(), AssemblyModes.Response.ERROR_INTERNAL,
-                           f"internal error: {exc!r}")
 
+        return self._query(AssemblyModes, "assembly modes", response, fill)
 
     def _on_inverse_kinematics(self, request, response):
+        def fill(planner):
+            mechanism = planner.roadmap.mechanism
+            modes = working_modes(planner, pose_from_msg(mechanism, request.pose))
+            response.modes = [_working_mode_msg(mechanism, m) for m in modes]
+
+        return self._query(InverseKinematics, "inverse kinematics", response, fill)
+
+    def _query(self, service, what, response, fill):
+        """A query of the current roadmap answered: ``fill(planner)`` fills
+        the response, and what it raises (message conversion included) is
+        mapped to the service's ERROR_ constant of its code, a bug to
+        ERROR_INTERNAL, so that the service keeps serving."""
         state = self._state
         try:
             if state is None:
-                return _failed(response, InverseKinematics.Response.ERROR_NO_ROADMAP,
+                return _failed(response, service.Response.ERROR_NO_ROADMAP,
                                "no roadmap received yet on 'field' and 'roadmap'")
-            mechanism = state.planner.roadmap.mechanism
-            modes = working_modes(state.planner, pose_from_msg(mechanism, request.pose))
-            response.modes = [_working_mode_msg(mechanism, m) for m in modes]
+            fill(state.planner)
             response.success = True
-            response.error_code = InverseKinematics.Response.ERROR_NONE
+            response.error_code = service.Response.ERROR_NONE
             return response
         except GWRError as exc:
-            code = getattr(InverseKinematics.Response, f"ERROR_{exc.code}",
-                           InverseKinematics.Response.ERROR_INTERNAL)
-            return _failed(InverseKinematics.Response(), code, str(exc))
+            code = getattr(service.Response, f"ERROR_{exc.code}",
+                           service.Response.ERROR_INTERNAL)
+            return _failed(service.Response(), code, str(exc))
         except Exception as exc:  # a bug must not take the service down
-            self.get_logger().error(f"internal error on an inverse kinematics request: "
-                                    f"{exc!r}")
-            return _failed(InverseKinematics.Response(),
-                           InverseKinematics.Response.ERROR_INTERNAL, f"internal error: {exc!r}")
+            self.get_logger().error(f"internal error on an {what} request: {exc!r}")
+            return _failed(service.Response(), service.Response.ERROR_INTERNAL,
+                           f"internal error: {exc!r}")
 
 
 def _plan_end(mechanism, which, configuration, is_pose, pose, working_mode):
