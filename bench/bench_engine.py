@@ -3,7 +3,8 @@
 Run on demand, after ``source ros2_ws/env.sh``:
 
     python bench/bench_engine.py [--pairs 250] [--seed 1] [--ompl-time 1.0]
-                                 [--reference-pairs N] [--repeat 3] [--clearance 0.02]
+                                 [--ompl-step 1.0] [--reference-pairs N] [--repeat 3]
+                                 [--clearance 0.02] [--smooth]
 
 The pose space is the independent reference: inverse kinematics of the 3-RPR
 is unique, so (x, y, alpha) is the configuration space, and a pose path that
@@ -15,14 +16,17 @@ endpoints near a face of the box of legs, a tenth with both endpoint margins
 in [3e-3, 0.02], the rest uniform.  Each pair is planned
 
 * by the project's planner on the full roadmap (its planning index mapped and
-  kernels loaded before timing; smoothing on), its path re-checked by the
-  reference's continuation and its legs against the box;
-* by OMPL's RRTConnect in pose space: (x, y) in [-50, 50]^2 times SO(2), the
-  rotation weighted by the reference's length scale; a motion is checked in
-  steps of the reference's continuation (a twentieth of the margin times the
-  scale, in scaled pose length), the path shortened by OMPL's simplifier
-  within the same per-pair time limit (the time includes it), then re-checked
-  in steps four times finer;
+  kernels loaded before timing; its default options, or smoothing on with
+  ``--smooth``), its path re-checked by the reference's continuation and its
+  legs against the box;
+* by OMPL's RRTConnect in pose space, set up as OMPL's own demos set it up:
+  a ``SimpleSetup`` on (x, y) in [-50, 50]^2 times SO(2), the rotation
+  weighted by the reference's length scale; the reference's predicate as a
+  scalar state validity checker, OMPL's discrete motion validator at a fixed
+  resolution (``--ompl-step``), the found path simplified by
+  ``simplifySolution()`` (a bounded ``simplifyMax``; the time includes it),
+  then re-checked by the reference's continuation (steps of an eightieth of
+  the margin times the scale, in scaled pose length);
 * for the shortest joint path: Dijkstra on a pose lattice (step 1, 128
   orientations, 26 neighbours, edges checked at their ends and middle,
   weighted by the legs' change).
@@ -82,8 +86,12 @@ _NEAR_FACE = 0.5
 _LOW_MARGIN = 0.02
 # The reference continuation's step: the pose moves at most this times the margin
 # (scaled length: sqrt(dx**2 + dy**2 + (SCALE * dalpha)**2)).
-_MOTION_STEP = 0.05 * SCALE
-_RECHECK_STEP = _MOTION_STEP / 4
+_RECHECK_STEP = 0.0125 * SCALE
+# OMPL's state validity checking resolution [scaled length]: the coarsest of
+# 2, 1, 0.5, 0.2, 0.1 and 0.05 whose simplified paths all passed the re-check
+# on 80 pairs of seed 1 (at 2, near OMPL's default of 1 % of the space's
+# extent, 3 of them failed it).
+_OMPL_STEP = 1.0
 # Largest step when a pose path's joint length is measured [scaled length].
 _SAMPLE = 0.05
 _LATTICE_STEP = 1.0
@@ -155,26 +163,18 @@ def _draw_pairs(rng, count):
     return pairs
 
 
-class _MarginSteps(ob.MotionValidator):
-    """A motion is valid when :func:`_walk` in the reference's steps accepts it."""
-
-    def __init__(self, si, space):
-        super().__init__(si)
-        self._space = space
-
-    def checkMotion(self, s1, s2, *_):  # noqa: N802 (OMPL's name)
-        return _walk(_pose(s1), _pose(s2), self._space.sign, _MOTION_STEP)[0]
-
-
 def _pose(state):
     xy = state[0]
     return (xy[0], xy[1], state[1].value)
 
 
 class _OmplPoseSpace:
-    """OMPL's RRTConnect on (x, y, alpha) with the reference's validity."""
+    """OMPL's RRTConnect on (x, y, alpha), set up as OMPL's own demos do: a
+    ``SimpleSetup`` with a scalar state validity checker (the reference's
+    predicate), OMPL's discrete motion validator at a fixed resolution and
+    its bounded simplifier (``simplifySolution()``: ``simplifyMax``)."""
 
-    def __init__(self, seed):
+    def __init__(self, seed, step):
         ou.setLogLevel(ou.LOG_ERROR)
         ou.RNG.setSeed(seed)
         plane = ob.RealVectorStateSpace(2)
@@ -186,15 +186,16 @@ class _OmplPoseSpace:
         space.addSubspace(plane, 1.0)
         space.addSubspace(ob.SO2StateSpace(), SCALE)
         self.sign = 1.0
-        self.si = ob.SpaceInformation(space)
-        self.si.setStateValidityChecker(
+        self.setup = og.SimpleSetup(space)
+        self.setup.setStateValidityChecker(
             lambda state: _signed_margin(_pose(state), self.sign)[0] >= _MIN_MARGIN)
-        self._validator = _MarginSteps(self.si, self)
-        self.si.setMotionValidator(self._validator)
-        self.si.setup()
+        si = self.setup.getSpaceInformation()
+        si.setStateValidityCheckingResolution(step / space.getMaximumExtent())
+        self.setup.setPlanner(og.RRTConnect(si))
+        self.setup.setup()
 
     def _state(self, pose):
-        state = self.si.allocState()
+        state = self.setup.getSpaceInformation().allocState()
         state[0][0], state[0][1] = float(pose[0]), float(pose[1])
         state[1].value = float(math.remainder(pose[2], 2 * math.pi))
         return state
@@ -204,17 +205,13 @@ class _OmplPoseSpace:
         seconds taken."""
         begin = time.perf_counter()
         self.sign = math.copysign(1.0, margin_of(start_pose))
-        problem = ob.ProblemDefinition(self.si)
-        problem.setStartAndGoalStates(self._state(start_pose), self._state(goal_pose))
-        planner = og.RRTConnect(self.si)
-        planner.setProblemDefinition(problem)
-        planner.setup()
-        planner.solve(seconds)
-        if not problem.hasExactSolution():
+        self.setup.clear()
+        self.setup.setStartAndGoalStates(self._state(start_pose), self._state(goal_pose))
+        self.setup.solve(seconds)
+        if not self.setup.haveExactSolutionPath():
             return None, time.perf_counter() - begin
-        path = problem.getSolutionPath()
-        og.PathSimplifier(self.si).simplify(
-            path, max(0.0, seconds - (time.perf_counter() - begin)))
+        self.setup.simplifySolution()
+        path = self.setup.getSolutionPath()
         elapsed = time.perf_counter() - begin
         return np.array([_pose(state) for state in path.getStates()]), elapsed
 
@@ -468,7 +465,7 @@ def _emit(line):
     print(json.dumps(line), flush=True)
 
 
-def _plan_project(pairs, clearance):
+def _plan_project(pairs, clearance, smooth):
     """Plan every pair with the project's planner, re-check each path."""
     begin = time.perf_counter()
     roadmap, index, _ = cached_planning(PAPER_GEOMETRY, FULL_BASE_GRID,
@@ -478,7 +475,7 @@ def _plan_project(pairs, clearance):
     planner.warm_up()
     _emit({"stage": "project planner set up (load and map the index, warm-up)",
            "load_s": round(loaded, 2), "total_s": round(time.perf_counter() - begin, 2)})
-    records, options = [], PlanOptions(smooth=True, clearance=clearance)
+    records, options = [], PlanOptions(smooth=smooth, clearance=clearance)
     for (start, start_pose), (goal, goal_pose) in pairs:
         begin = time.perf_counter()
         try:
@@ -498,9 +495,9 @@ def _plan_project(pairs, clearance):
     return records
 
 
-def _plan_ompl(pairs, seed, seconds):
+def _plan_ompl(pairs, seed, seconds, step):
     """Plan every pair with OMPL in pose space, re-check each path."""
-    space = _OmplPoseSpace(seed)
+    space = _OmplPoseSpace(seed, step)
     space.solve(pairs[0][0][1], pairs[0][1][1], seconds)  # loads OMPL's code paths
     records = []
     for (_, start_pose), (_, goal_pose) in pairs:
@@ -559,11 +556,16 @@ def main():
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--ompl-time", type=float, default=1.0,
                         help="OMPL's time limit per pair, simplification included [s]")
+    parser.add_argument("--ompl-step", type=float, default=_OMPL_STEP,
+                        help="OMPL's state validity checking resolution, as a step "
+                             "[scaled pose length]")
     parser.add_argument("--reference-pairs", type=int, default=None,
                         help="shortest paths for the first N pairs only (default: all)")
     parser.add_argument("--clearance", type=float, default=DEFAULT_CLEARANCE,
                         help="the planner's clearance (a larger margin from singularities, "
                              "kept where the roadmap allows, makes paths longer)")
+    parser.add_argument("--smooth", action="store_true",
+                        help="plan with smoothing (default: the planner's default answer)")
     parser.add_argument("--repeat", type=int, default=3,
                         help="runs of each fresh-process timing (median)")
     args = parser.parse_args()
@@ -584,13 +586,15 @@ def main():
         _emit({"fresh_process": f"rpr3-gwr {command}", "repeat": args.repeat,
                "median_s": round(seconds, 3), "over_baseline": round(seconds / baseline, 3)})
 
-    project = _plan_project(pairs, args.clearance)
-    ompl = _plan_ompl(pairs, args.seed, args.ompl_time)
+    project = _plan_project(pairs, args.clearance, args.smooth)
+    ompl = _plan_ompl(pairs, args.seed, args.ompl_time, args.ompl_step)
     count = len(pairs) if args.reference_pairs is None else min(args.reference_pairs, len(pairs))
     _emit(_shortest_paths(pairs[:count], project, ompl))
 
-    ours = _summary("rpr3-gwr (in process, index mapped, smoothed)", project, kinds)
-    theirs = _summary(f"OMPL RRTConnect in pose space, simplified (limit {args.ompl_time} s)",
+    ours = _summary("rpr3-gwr (in process, index mapped"
+                    + (", smoothed)" if args.smooth else ", default options)"), project, kinds)
+    theirs = _summary(f"OMPL RRTConnect in pose space, SimpleSetup, discrete motion validator "
+                      f"(step {args.ompl_step}), simplifySolution() (limit {args.ompl_time} s)",
                       ompl, kinds)
     _emit(ours)
     _emit(theirs)
