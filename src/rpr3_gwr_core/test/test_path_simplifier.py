@@ -174,6 +174,17 @@ def test_a_problem_refuses_what_it_cannot_plan(planner):
     assert PlanningProblem(s, g, 0.0).kept_margin(planner.min_margin) == planner.min_margin
 
 
+def test_the_kept_margin_is_a_quarter_of_the_clearance_or_half_the_lower_end_margin(planner):
+    """A path may dip below an end's own margin (it leaves that end towards
+    lower margins), so near-singular ends ask for half of theirs."""
+    s, g = (planner.locate(c) for c in PAIRS[0])
+    low = min(abs(s.margin), abs(g.margin))
+    assert PlanningProblem(s, g, 1e-6).kept_margin(0.0) == pytest.approx(0.25e-6)
+    assert PlanningProblem(s, g, 0.99).kept_margin(0.0) == pytest.approx(
+        min(0.25 * 0.99, 0.5 * low))
+    assert PlanningProblem(s, g, 0.99).kept_margin(1.0) == 1.0
+
+
 def test_a_checker_and_a_simplifier_refuse_what_they_cannot_count(planner):
     for bad in ({"min_margin": -1.0}, {"max_step": 0.0}, {"max_step": math.inf}):
         with pytest.raises(InvalidInputError):

@@ -253,8 +253,9 @@ class PlannerNode(Node):
                         "[length unit/s^2]", floating_point_range=positive))
         self.declare_parameter("clearance", DEFAULT_CLEARANCE, ParameterDescriptor(
             description="Margin (normalised |det Jx|) that paths keep from the singular "
-                        "locus wherever the roadmap allows; they keep a quarter of it in "
-                        "validation, or what the start and goal allow",
+                        "locus wherever the roadmap allows, traded for length (larger keeps "
+                        "farther and is longer, 0 the shortest); they keep a quarter of it "
+                        "in validation, or half the start's or goal's margin where less",
             floating_point_range=[FloatingPointRange(from_value=0.0, to_value=0.5)]))
         self.declare_parameter("default_time_limit", 10.0, ParameterDescriptor(
             description="Longest time to plan a request that gives no time_limit, from its "

@@ -58,6 +58,9 @@ class PlanningProblem:
     def kept_margin(self, min_margin):
         """Margin [normalised ``|det Jx|``] a path must keep in the motion
         checker before a repair gives up on it: a quarter of the clearance,
-        or less where an end itself is closer, but never below ``min_margin``."""
-        return max(min_margin, min(0.25 * self.clearance, abs(self.start.margin),
-                                   abs(self.goal.margin)))
+        or half an end's own margin where that is less (a path leaving an
+        end that lies near the singular locus dips below the end's margin
+        wherever the margin falls towards the other end), but never below
+        ``min_margin``."""
+        return max(min_margin, min(0.25 * self.clearance, 0.5 * abs(self.start.margin),
+                                   0.5 * abs(self.goal.margin)))

@@ -4,11 +4,12 @@ simplified, and searched again around the step the motion checker refuses.
 The path's cells keep the clearance where they can, but between two cell
 centres next to a cusp point, or over a singular sliver thinner than a
 cell, the sheet can dip far lower, even below ``min_margin``.  The path must
-therefore keep a quarter of the clearance (or what the start and goal
-allow) in the motion checker; where it does not, the cells around the step
-where it dipped are blocked, in a box growing with each repair, and the
-stretch of the cell path around them searched again (or the whole path),
-a few times, before a path that keeps ``min_margin`` will do.
+therefore keep a quarter of the clearance (or half the margin of the
+start or goal when that is less) in the motion checker; where it does not,
+the cells around the step where it dipped are blocked, in a box growing
+with each repair, and the stretch of the cell path around them searched
+again (or the whole path), a few times, before a path that keeps
+``min_margin`` will do.
 """
 
 import functools
