@@ -223,7 +223,7 @@ def _plan(draw, files):
         "--joint-limit": st.tuples(st.sampled_from(["rho1", "rho2", "rho3", "th1", "", "rho2="]),
                                    NUMBER, NUMBER).map(
             lambda limit: [f"{limit[0]}={limit[1]},{limit[2]}"]),
-        "--alpha-tol-deg": NUMBER,
+        "--alpha-tol-deg": NUMBER, "--clearance": NUMBER,
         "-o": _out_file(files)}, required=ends[0] + ends[1]))
     # A working mode drawn as "=SIGNS" is written --option=SIGNS.
     written = []

@@ -10,7 +10,7 @@ Subcommands::
     rpr3-gwr roadmap --full [--cache-dir DIR] [--gexf FILE] [--roadmap-figure FILE]
                      [--slice-figure FILE] [--slice-rho1 17]
     rpr3-gwr plan --rho1 17 --start RHO2 RHO3 ALPHA_DEG --goal RHO2 RHO3 ALPHA_DEG
-                  [--smooth] [--weighted] [--feasibility-only]
+                  [--smooth] [--weighted] [--clearance 0.02] [--feasibility-only]
                   [--max-velocity V --max-acceleration A [--joint-limit NAME=V,A ...]]
                   [--time-limit SECONDS] [-o FILE]
     rpr3-gwr plan --full --start RHO1 RHO2 RHO3 ALPHA_DEG --goal RHO1 RHO2 RHO3 ALPHA_DEG
@@ -77,6 +77,13 @@ def _finite(text):
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"not a finite number: {text!r}")
+    return value
+
+
+def _clearance(text):
+    value = _finite(text)
+    if not 0 <= value < 1:
+        raise argparse.ArgumentTypeError(f"a clearance lies in [0, 1), got {text!r}")
     return value
 
 
@@ -235,6 +242,11 @@ def _parser():
                                "starts with -")
     plan.add_argument("--smooth", action="store_true", help="shortcut and round the path")
     plan.add_argument("--weighted", action="store_true", help="rank global paths by weighted cost")
+    plan.add_argument("--clearance", type=_clearance,
+                      help="margin (normalised |det Jx|) the path keeps from the singular "
+                           "locus wherever the roadmap allows, in [0, 1): larger keeps "
+                           "farther and is longer, 0 the shortest (default: the "
+                           "planner's, 0.02)")
     plan.add_argument("--feasibility-only", action="store_true",
                       help="answer from the roadmap alone, without a trajectory")
     plan.add_argument("--max-velocity", type=_finite,

@@ -568,14 +568,16 @@ def _options(args, mechanism, mode_tol):
     mode tolerance in the core's unit (None: the default)."""
     from ..planning import PlanOptions
 
-    tolerance = {} if mode_tol is None else {"mode_tol": mode_tol}
+    given = {} if mode_tol is None else {"mode_tol": mode_tol}
+    if args.clearance is not None:
+        given["clearance"] = args.clearance
     limits = (_joint_rate(mechanism, args.max_velocity, "max-velocity"),
               _joint_rate(mechanism, args.max_acceleration, "max-acceleration"))
     if args.joint_limit:
         limits = _joint_limits(mechanism, limits, args.joint_limit)
     return PlanOptions(smooth=args.smooth, weighted=args.weighted,
                        feasibility_only=args.feasibility_only, max_velocity=limits[0],
-                       max_acceleration=limits[1], **tolerance)
+                       max_acceleration=limits[1], **given)
 
 
 def _joint_limits(mechanism, limits, entries):
