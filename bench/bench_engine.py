@@ -4,7 +4,7 @@ Run on demand, after ``source ros2_ws/env.sh``:
 
     python bench/bench_engine.py [--pairs 250] [--seed 1] [--ompl-time 1.0]
                                  [--ompl-step 1.0] [--reference-pairs N] [--repeat 3]
-                                 [--clearance 0.02] [--smooth]
+                                 [--clearance 0.02] [--no-smooth]
 
 The pose space is the independent reference: inverse kinematics of the 3-RPR
 is unique, so (x, y, alpha) is the configuration space, and a pose path that
@@ -16,9 +16,9 @@ endpoints near a face of the box of legs, a tenth with both endpoint margins
 in [3e-3, 0.02], the rest uniform.  Each pair is planned
 
 * by the project's planner on the full roadmap (its planning index mapped and
-  kernels loaded before timing; its default options, or smoothing on with
-  ``--smooth``), its path re-checked by the reference's continuation and its
-  legs against the box;
+  kernels loaded before timing; smoothed, the service's and the CLI's
+  default answer, or not with ``--no-smooth``), its path re-checked by the
+  reference's continuation and its legs against the box;
 * by OMPL's RRTConnect in pose space, set up as OMPL's own demos set it up:
   a ``SimpleSetup`` on (x, y) in [-50, 50]^2 times SO(2), the rotation
   weighted by the reference's length scale; the reference's predicate as a
@@ -564,8 +564,9 @@ def main():
     parser.add_argument("--clearance", type=float, default=DEFAULT_CLEARANCE,
                         help="the planner's clearance (a larger margin from singularities, "
                              "kept where the roadmap allows, makes paths longer)")
-    parser.add_argument("--smooth", action="store_true",
-                        help="plan with smoothing (default: the planner's default answer)")
+    parser.add_argument("--smooth", action=argparse.BooleanOptionalAction, default=True,
+                        help="plan with smoothing, the service's and the CLI's default answer "
+                             "(--no-smooth: the cell path as it is)")
     parser.add_argument("--repeat", type=int, default=3,
                         help="runs of each fresh-process timing (median)")
     args = parser.parse_args()
@@ -592,7 +593,7 @@ def main():
     _emit(_shortest_paths(pairs[:count], project, ompl))
 
     ours = _summary("rpr3-gwr (in process, index mapped"
-                    + (", smoothed)" if args.smooth else ", default options)"), project, kinds)
+                    + (", smoothed)" if args.smooth else ", not smoothed)"), project, kinds)
     theirs = _summary(f"OMPL RRTConnect in pose space, SimpleSetup, discrete motion validator "
                       f"(step {args.ompl_step}), simplifySolution() (limit {args.ompl_time} s)",
                       ompl, kinds)

@@ -59,7 +59,7 @@ def test_a_builder_in_full_mode_feeds_a_planner_that_moves_rho1(ros_context, ful
         assert builder.roadmap.grid == full_roadmap.grid
         client.wait_until_ready(timeout_sec=TIMEOUT)
         response = client.plan(_configuration(POCKET[0]), _configuration(POCKET[1]),
-                               smooth=False, max_velocity=2.0, max_acceleration=4.0,
+                               skip_smoothing=True, max_velocity=2.0, max_acceleration=4.0,
                                timeout_sec=TIMEOUT)
         assert response.success, response.error_msg
         assert not response.roadmap_fixed_joints and not response.roadmap_fixed_values

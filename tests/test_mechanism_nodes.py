@@ -103,7 +103,8 @@ class Suite(SpunNodes):
         self.client.wait_until_ready(timeout_sec=TIMEOUT)
 
     def plan(self, start, goal, smooth=False, **options):
-        return self.client.plan(start, goal, smooth=smooth, timeout_sec=TIMEOUT, **options)
+        return self.client.plan(start, goal, skip_smoothing=not smooth, timeout_sec=TIMEOUT,
+                                **options)
 
 
 @pytest.fixture

@@ -28,7 +28,7 @@ PLANNER = (pathlib.Path(__file__).resolve().parents[1] / "ros2_ws" / "install" /
 D = math.radians
 REQUEST = PlanPath.Request(
     start=Configuration(positions=[17.0, 12.0, 18.0], mode=D(122.82)),
-    goal=Configuration(positions=[17.0, 10.0, 25.0], mode=D(-24.24)), smooth=True)
+    goal=Configuration(positions=[17.0, 10.0, 25.0], mode=D(-24.24)))
 
 
 @contextlib.contextmanager

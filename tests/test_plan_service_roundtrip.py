@@ -49,7 +49,6 @@ def test_plan_request_and_response_cross_dds_intact(ros_context):
         request.start.mode = math.radians(122.82)
         request.goal.positions = [17.0, 10.0, 25.0]
         request.goal.mode = math.radians(-24.24)
-        request.smooth = True
         request.max_velocity, request.max_acceleration = 2.0, 4.0
         future = client.call_async(request)
         executor.spin_until_future_complete(future, timeout_sec=10.0)

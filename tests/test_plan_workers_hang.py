@@ -31,7 +31,7 @@ from process_tree import children, running, wait_for_children
 D = math.radians
 REQUEST = PlanPath.Request(
     start=Configuration(positions=[17.0, 12.0, 18.0], mode=D(122.82)),
-    goal=Configuration(positions=[17.0, 10.0, 25.0], mode=D(-24.24)), smooth=True)
+    goal=Configuration(positions=[17.0, 10.0, 25.0], mode=D(-24.24)))
 WORKERS = 2
 CLIENTS = 4
 # Length of the load after a stop [s].

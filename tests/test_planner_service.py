@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rpr3_gwr_core.paper import PAPER_GEOMETRY, PAPER_GRID
-from rpr3_gwr_core.planning import Planner, PlanStatus
+from rpr3_gwr_core.planning import Planner, PlanOptions, PlanStatus
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
 from rpr3_gwr_msgs.msg import (AssemblyMode, Configuration, JointLimits, NSolutionField,
                                WorkspaceRoadmap)
@@ -223,7 +223,7 @@ def test_a_one_millisecond_limit_is_answered_with_a_plan_or_a_timeout(service):
     a plan of what was found by then, or ERROR_TIMEOUT."""
     for _ in range(10):
         request = PlanPath.Request(start=_configuration(Q1), goal=_configuration(Q2),
-                                   smooth=True, time_limit=1e-3)
+                                   time_limit=1e-3)
         response = service.call(request)
         assert response.error_code in (PlanPath.Response.ERROR_NONE,
                                        PlanPath.Response.ERROR_TIMEOUT), response.error_msg
@@ -272,14 +272,14 @@ def test_no_limits_take_the_default_limits_as_the_interface_says(service):
 
 
 def test_limits_of_single_joints_hold_each_for_its_joint(service):
-    request = PlanPath.Request(start=_configuration(Q1), goal=_configuration(Q2), smooth=True,
+    request = PlanPath.Request(start=_configuration(Q1), goal=_configuration(Q2),
                                max_velocity=2.0, max_acceleration=4.0, joint_limits=[
                                    JointLimits(joint_name="rho3", max_velocity=0.25),
                                    JointLimits(joint_name="rho2", max_acceleration=0.5)])
     response = service.call(request)
     assert response.success, response.error_msg
     check_sound(request, response, service.stamp, service.default_limits())
-    fast = service.plan(Q1, Q2, smooth=True, max_velocity=2.0, max_acceleration=4.0)
+    fast = service.plan(Q1, Q2, max_velocity=2.0, max_acceleration=4.0)
     assert _seconds(response.trajectory.points[-1]) > _seconds(fast.trajectory.points[-1])
 
 
@@ -548,7 +548,7 @@ def requests(draw):
         **ends,
         mode_tolerance=draw(st.one_of(st.just(0.0), st.just(0.0), st.floats(1e-4, 0.2),
                                        hostile)),
-        smooth=draw(st.booleans()), weighted=draw(st.booleans()),
+        skip_smoothing=draw(st.booleans()), weighted=draw(st.booleans()),
         feasibility_only=draw(st.booleans()),
         max_velocity=max_velocity, max_acceleration=max_acceleration,
         joint_limits=draw(joint_limits()),
@@ -571,7 +571,7 @@ def test_fuzzed_requests_get_sound_answers_and_the_node_answers_a_good_one_after
     print(f"\nplan_path fuzz outcomes over {sum(outcomes.values())} requests: "
           f"{dict(sorted(outcomes.items()))}")
     assert sum(outcomes.values()) >= FUZZ_REQUESTS
-    response = service.plan(Q1, Q2, smooth=True)
+    response = service.plan(Q1, Q2)
     assert response.success, response.error_msg
     check_sound(PlanPath.Request(start=_configuration(Q1), goal=_configuration(Q2)), response,
                 service.stamp, service.default_limits())
@@ -608,7 +608,7 @@ def test_plans_from_workers_and_from_the_node_are_the_same(ros_context, count):
         for start, goal in ((Q1, Q2), (MODE_A, MODE_B)):
             response = service.plan(start, goal)
             assert response.success, response.error_msg
-            expected = Planner(service.roadmap).plan(start, goal)
+            expected = Planner(service.roadmap).plan(start, goal, PlanOptions(smooth=True))
             np.testing.assert_allclose(_positions(response), expected.joints, rtol=0, atol=1e-12)
         refused = service.plan((17.0, 20.0, 25.0, D(60.0)), MODE_B)
         assert refused.error_code == PlanPath.Response.ERROR_NO_ASSEMBLY_MODE, refused.error_msg

@@ -166,10 +166,10 @@ def test_a_plan_in_a_scene_keeps_every_body_off_its_obstacles(rig, name, smooth)
     """Each trajectory, followed in small steps by the reference, keeps off
     the obstacles: those of the narrowing scene, and a post put where the
     unsmoothed plan without a scene passes."""
-    request = _request(smooth=smooth)
+    request = _request(skip_smoothing=not smooth)
     if name == "on_the_way":
         rig.scenes.apply(_scene_msg({}))
-        free = rig.call(_request())
+        free = rig.call(_request(skip_smoothing=True))
         assert free.success, free.error_msg
         document = _on_the_way(free)
     else:

@@ -102,8 +102,8 @@ class Suite(SpunNodes):
         self.client.wait_until_ready(timeout_sec=TIMEOUT)
 
     def plan(self, start, goal, smooth=False, **options):
-        return self.client.plan(_configuration(start), _configuration(goal), smooth=smooth,
-                                timeout_sec=TIMEOUT, **options)
+        return self.client.plan(_configuration(start), _configuration(goal),
+                                skip_smoothing=not smooth, timeout_sec=TIMEOUT, **options)
 
     def reset(self, configuration):
         return self.client.reset_driver(_configuration(configuration), timeout_sec=TIMEOUT)

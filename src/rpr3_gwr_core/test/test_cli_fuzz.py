@@ -217,7 +217,8 @@ def _plan(draw, files):
     argv = draw(_options({
         "--rho1": SLICE_RHO1, "--start": st.just(start), "--goal": st.just(goal),
         "--start-pose": poses, "--goal-pose": poses, **modes,
-        "--smooth": st.just([]), "--weighted": st.just([]), "--feasibility-only": st.just([]),
+        "--smooth": st.just([]), "--no-smooth": st.just([]), "--weighted": st.just([]),
+        "--feasibility-only": st.just([]),
         "--max-velocity": _mostly(st.tuples(NUMBER, NUMBER).map(
             lambda limits: [limits[0], "--max-acceleration", limits[1]]), NUMBER),
         "--joint-limit": st.tuples(st.sampled_from(["rho1", "rho2", "rho3", "th1", "", "rho2="]),

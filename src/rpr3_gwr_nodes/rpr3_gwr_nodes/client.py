@@ -321,7 +321,7 @@ class PlannerClient(Node):
             self._spin_until(lambda: False, time.monotonic() + _POLL_PERIOD)
 
     def plan(self, start, goal, *, start_working_mode="", goal_working_mode="",
-             mode_tolerance=0.0, smooth=True, weighted=False, feasibility_only=False,
+             mode_tolerance=0.0, skip_smoothing=False, weighted=False, feasibility_only=False,
              max_velocity=0.0, max_acceleration=0.0, joint_limits=(), time_limit=0.0,
              timeout_sec=60.0):
         """Ask the planner for a trajectory from ``start`` to ``goal``.
@@ -340,8 +340,10 @@ class PlannerClient(Node):
         mode_tolerance : float
             Tolerance on their mode coordinates, 0 for the core's default
             [rad, or length unit].
-        smooth : bool
-            Shortcut and round the path (kept only if it validates).
+        skip_smoothing : bool
+            Return the validated path through the roadmap's cells as it is;
+            by default it is shortcut, pulled taut and rounded, each step
+            kept only if it validates.
         weighted : bool
             Rank global paths by weighted cost instead of fewest gates.
         feasibility_only : bool
@@ -375,8 +377,8 @@ class PlannerClient(Node):
             ``timeout_sec``.
         """
         request = PlanPath.Request(
-            mode_tolerance=float(mode_tolerance), smooth=smooth, weighted=weighted,
-            feasibility_only=feasibility_only, max_velocity=float(max_velocity),
+            mode_tolerance=float(mode_tolerance), skip_smoothing=bool(skip_smoothing),
+            weighted=weighted, feasibility_only=feasibility_only, max_velocity=float(max_velocity),
             max_acceleration=float(max_acceleration), joint_limits=_joint_limits(joint_limits),
             time_limit=float(time_limit))
         for end, given, mode in (("start", start, start_working_mode),

@@ -614,7 +614,7 @@ class PlannerNode(Node):
         velocity, acceleration = (values[0] if len(set(values)) == 1 else tuple(values)
                                   for values in per_joint)
         tolerance = {"mode_tol": request.mode_tolerance} if request.mode_tolerance else {}
-        return PlanOptions(smooth=request.smooth, weighted=request.weighted,
+        return PlanOptions(smooth=not request.skip_smoothing, weighted=request.weighted,
                            feasibility_only=request.feasibility_only, max_velocity=velocity,
                            max_acceleration=acceleration,
                            clearance=self.get_parameter("clearance").value, **tolerance)

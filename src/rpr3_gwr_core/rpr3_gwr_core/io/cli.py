@@ -10,7 +10,7 @@ Subcommands::
     rpr3-gwr roadmap --full [--cache-dir DIR] [--gexf FILE] [--roadmap-figure FILE]
                      [--slice-figure FILE] [--slice-rho1 17]
     rpr3-gwr plan --rho1 17 --start RHO2 RHO3 ALPHA_DEG --goal RHO2 RHO3 ALPHA_DEG
-                  [--smooth] [--weighted] [--clearance 0.02] [--feasibility-only]
+                  [--no-smooth] [--weighted] [--clearance 0.02] [--feasibility-only]
                   [--max-velocity V --max-acceleration A [--joint-limit NAME=V,A ...]]
                   [--time-limit SECONDS] [-o FILE]
     rpr3-gwr plan --full --start RHO1 RHO2 RHO3 ALPHA_DEG --goal RHO1 RHO2 RHO3 ALPHA_DEG
@@ -240,7 +240,10 @@ def _parser():
                           help=f"with --{end}-pose: each leg's branch, + or - (the output of "
                                f"'rpr3-gwr ik'), written --{end}-working-mode=-+- when it "
                                "starts with -")
-    plan.add_argument("--smooth", action="store_true", help="shortcut and round the path")
+    plan.add_argument("--smooth", action=argparse.BooleanOptionalAction, default=True,
+                      help="shortcut, pull taut and round the path, each step kept only if it "
+                           "validates; --no-smooth gives the validated path through the "
+                           "roadmap's cells as it is (default: smooth)")
     plan.add_argument("--weighted", action="store_true", help="rank global paths by weighted cost")
     plan.add_argument("--clearance", type=_clearance,
                       help="margin (normalised |det Jx|) the path keeps from the singular "
