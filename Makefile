@@ -35,6 +35,7 @@ test-quick: build
 test-floor:
 	$(FLOOR) bash ros2_ws/setup.sh
 	export $(FLOOR) && $(ENV) && python -m pytest -m "not slow" tests src/rpr3_gwr_nodes/test \
+	  src/rpr3_gwr_msgs/test \
 	  src/rpr3_gwr_core/test/test_figures.py src/rpr3_gwr_core/test/test_cli_figures.py
 
 test-core-py312:
