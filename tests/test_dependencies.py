@@ -21,6 +21,7 @@ from packaging.version import Version
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 WS = ROOT / "ros2_ws"
 PACKAGES = {"rpr3_gwr_core": ["rpr3_gwr_core"],
+            "rpr3_gwr_msgs": ["test"],
             "rpr3_gwr_nodes": ["rpr3_gwr_nodes", "launch"]}
 # What each system-dependency key of the package.xml files installs on
 # Ubuntu 24.04: the pip distribution of its apt package and the modules it
