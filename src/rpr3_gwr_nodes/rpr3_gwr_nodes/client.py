@@ -342,8 +342,8 @@ class PlannerClient(Node):
             [rad, or length unit].
         skip_smoothing : bool
             Return the validated path through the roadmap's cells as it is;
-            by default it is shortcut, pulled taut and rounded, each step
-            kept only if it validates.
+            by default it is shortcut, pulled taut (on a roadmap of all the
+            joints) and rounded, each step kept only if it validates.
         weighted : bool
             Rank global paths by weighted cost instead of fewest gates.
         feasibility_only : bool

@@ -241,9 +241,10 @@ def _parser():
                                f"'rpr3-gwr ik'), written --{end}-working-mode=-+- when it "
                                "starts with -")
     plan.add_argument("--smooth", action=argparse.BooleanOptionalAction, default=True,
-                      help="shortcut, pull taut and round the path, each step kept only if it "
-                           "validates; --no-smooth gives the validated path through the "
-                           "roadmap's cells as it is (default: smooth)")
+                      help="shortcut, pull taut (on a roadmap of all the joints) and round "
+                           "the path, each step kept only if it validates; --no-smooth gives "
+                           "the validated path through the roadmap's cells as it is "
+                           "(default: smooth)")
     plan.add_argument("--weighted", action="store_true", help="rank global paths by weighted cost")
     plan.add_argument("--clearance", type=_clearance,
                       help="margin (normalised |det Jx|) the path keeps from the singular "
