@@ -230,8 +230,8 @@ def _platform_at(message, point):
 def test_tf_reaches_a_default_subscriber_with_the_frames_of_the_legs_and_platform(rig):
     rig.reset()
     joints, pose, _ = rig.driver.state()
-    # Messages of the state before the reset may still be on their way (one
-    # came 0.2 s after it on a loaded machine): the state's own must come.
+    # Messages of the state before the reset may still be on their way on a
+    # loaded machine: the state's own must come.
     deadline = time.monotonic() + TIMEOUT
     while not any(_platform_at(m, pose[:2]) for m in list(rig.transforms)):
         assert time.monotonic() < deadline, "no /tf of the state after the reset"

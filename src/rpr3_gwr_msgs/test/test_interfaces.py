@@ -14,7 +14,6 @@ pytestmark = pytest.mark.ros
 
 PACKAGE = pathlib.Path(__file__).resolve().parents[1]
 FILES = sorted(p for kind in ("msg", "srv", "action") for p in (PACKAGE / kind).glob(f"*.{kind}"))
-CODE_FIELDS = {"error_code": "ERROR_"}
 
 
 def _interfaces():
@@ -37,13 +36,18 @@ def test_the_package_ships_the_designed_interfaces():
     ]
 
 
+def _parts(kind, name):
+    """The generated classes of an interface: the message, or a service's
+    request and response, or an action's goal, result and feedback."""
+    interface = getattr(importlib.import_module(f"rpr3_gwr_msgs.{kind}"), name)
+    parts = {"msg": (), "srv": ("Request", "Response"),
+             "action": ("Goal", "Result", "Feedback")}[kind]
+    return [getattr(interface, p) for p in parts] or [interface]
+
+
 def test_every_interface_imports_and_instantiates():
     for kind, name in _interfaces():
-        cls = getattr(importlib.import_module(f"rpr3_gwr_msgs.{kind}"), name)
-        parts = {"msg": ("",), "srv": ("Request", "Response"),
-                 "action": ("Goal", "Result", "Feedback")}[kind]
-        parts = [getattr(cls, p) if p else cls for p in parts]
-        for part in parts:
+        for part in _parts(kind, name):
             instance = part()
             assert type(instance).__name__ == part.__name__
 
@@ -61,18 +65,6 @@ def test_constants_of_each_group_are_distinct():
         assert len(values) == len(set(values)) > 3
 
 
-def _parts(path):
-    """The generated classes of an interface file: the message, or a
-    service's request and response, or an action's goal, result and feedback."""
-    module = importlib.import_module(f"rpr3_gwr_msgs.{path.parent.name}")
-    interface = getattr(module, path.stem)
-    if path.parent.name == "msg":
-        return [interface]
-    if path.parent.name == "srv":
-        return [interface.Request, interface.Response]
-    return [interface.Goal, interface.Result, interface.Feedback]
-
-
 @pytest.mark.parametrize("path", FILES, ids=lambda p: f"{p.parent.name}/{p.name}")
 def test_every_field_and_constant_is_documented_where_it_is_declared(path):
     """Each run of declarations starts under a comment."""
@@ -88,7 +80,7 @@ def test_every_field_and_constant_is_documented_where_it_is_declared(path):
 
 @pytest.mark.parametrize("path", FILES, ids=lambda p: f"{p.parent.name}/{p.name}")
 def test_a_header_comes_first(path):
-    for part in _parts(path):
+    for part in _parts(path.parent.name, path.stem):
         types = list(part.get_fields_and_field_types().values())
         if "std_msgs/Header" in types:
             assert types[0] == "std_msgs/Header", f"{part.__name__}: the header is not first"
@@ -96,20 +88,19 @@ def test_a_header_comes_first(path):
 
 @pytest.mark.parametrize("path", FILES, ids=lambda p: f"{p.parent.name}/{p.name}")
 def test_result_codes_are_typed_constants_beside_an_error_string(path):
-    for part in _parts(path):
+    for part in _parts(path.parent.name, path.stem):
         fields = part.get_fields_and_field_types()
-        for field, prefix in CODE_FIELDS.items():
-            if field not in fields:
-                continue
-            assert fields["error_msg"] == "string", f"{part.__name__} has no error_msg"
+        if "error_code" not in fields:
+            continue
+        assert fields["error_msg"] == "string", f"{part.__name__} has no error_msg"
+        codes = {name: getattr(part, name) for name in dir(part)
+                 if name.startswith("ERROR_") and name.isupper()}
+        if not codes:  # an action's result: its constants open the file
             codes = {name: getattr(part, name) for name in dir(part)
-                     if name.startswith(prefix) and name.isupper()}
-            if not codes:  # an action's result: its constants open the file
-                codes = {name: getattr(part, name) for name in dir(part)
-                         if name.isupper() and isinstance(getattr(part, name), int)}
-            assert codes, f"{part.__name__}.{field} has no constants"
-            assert fields[field] == "uint8" and all(0 <= v < 256 for v in codes.values())
-            assert 0 in codes.values(), f"{part.__name__}: no code for success"
+                     if name.isupper() and isinstance(getattr(part, name), int)}
+        assert codes, f"{part.__name__}.error_code has no constants"
+        assert fields["error_code"] == "uint8" and all(0 <= v < 256 for v in codes.values())
+        assert 0 in codes.values(), f"{part.__name__}: no code for success"
 
 
 def test_a_plan_request_left_at_its_defaults_asks_for_the_smoothed_answer():
