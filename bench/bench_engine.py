@@ -87,10 +87,10 @@ _LOW_MARGIN = 0.02
 # The reference continuation's step: the pose moves at most this times the margin
 # (scaled length: sqrt(dx**2 + dy**2 + (SCALE * dalpha)**2)).
 _RECHECK_STEP = 0.0125 * SCALE
-# OMPL's state validity checking resolution [scaled length]: the coarsest of
-# 2, 1, 0.5, 0.2, 0.1 and 0.05 whose simplified paths all passed the re-check
-# on 80 pairs of seed 1 (at 2, near OMPL's default of 1 % of the space's
-# extent, 3 of them failed it).
+# OMPL's state validity checking resolution [scaled length]: what a user
+# tunes it to, the coarsest step whose simplified paths pass the re-check
+# (OMPL's default, 1 % of the space's extent, about 2, lets paths through that
+# fail it).
 _OMPL_STEP = 1.0
 # Largest step when a pose path's joint length is measured [scaled length].
 _SAMPLE = 0.05
