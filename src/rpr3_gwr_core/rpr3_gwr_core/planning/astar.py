@@ -298,9 +298,10 @@ def work_arrays(n_nodes, n_links):
 
 
 @numba.njit(cache=True, nogil=True)
-def _search(graph, costs, layer, sources, target, blocked, guide, stop, work):
+def _search(graph, costs, layer, sources, target, blocked, corridor, guide, stop, work):
     """Least costs from ``sources`` through the layers, up to ``target`` (all
-    reachable nodes when it is -1), stopping where ``stop`` says; returns
+    reachable nodes when it is -1), in the ``corridor`` when it is not
+    empty, stopping where ``stop`` says; returns
     how many nodes it touched, which are the first entries of ``touched``,
     and whether it stopped before the target."""
     # Unpacked once: the loop then reads plain local arrays, without the
@@ -378,6 +379,8 @@ def _search(graph, costs, layer, sources, target, blocked, guide, stop, work):
                 continue
             if blocked.size and _is_blocked(blocked, node_cell[v]):
                 continue
+            if corridor.size and corridor[v] == 0:
+                continue
             reach = g[u] + quanta[e] * (cost_u + _node_cost(node_cost, node_margin, clearance,
                                                             penalty, v))
             if reach < g[v]:
@@ -451,7 +454,7 @@ def gate_distances(graph, costs, n_patches, k, sources, work):
     layer = np.full(n_patches, -1, np.int32)
     layer[k] = 0
     empty = np.zeros(0, np.int64)
-    n_touched, _ = _search(graph, costs, layer, sources, -1, empty,
+    n_touched, _ = _search(graph, costs, layer, sources, -1, empty, np.zeros(0, np.uint8),
                            (0, empty, empty, empty, empty, empty), Stop(np.inf, 2**62), work)
     out = work.g[first:end].copy()
     _reset(work.g, work.closed, work.touched, n_touched)
@@ -459,7 +462,7 @@ def gate_distances(graph, costs, n_patches, k, sources, work):
 
 
 @numba.njit(cache=True, nogil=True)
-def layered_astar(graph, costs, layer, source, target, blocked, guide, stop, work):
+def layered_astar(graph, costs, layer, source, target, blocked, corridor, guide, stop, work):
     """Least-cost node path from ``source`` to ``target`` through the layers.
 
     Parameters
@@ -472,6 +475,9 @@ def layered_astar(graph, costs, layer, source, target, blocked, guide, stop, wor
         Nodes of the start cell (layer 0) and of the goal cell (last layer).
     blocked : ndarray of int64, shape (k,)
         Cells not to enter, ascending.
+    corridor : ndarray of uint8, shape (n_nodes,) or (0,)
+        Nodes that may be entered (1) and not (0) (:mod:`~.corridor`);
+        empty: all.
     guide : Guide
         The heuristic; its ``cost_floor`` at least 1.
     stop : Stop
@@ -489,8 +495,8 @@ def layered_astar(graph, costs, layer, source, target, blocked, guide, stop, wor
         :data:`TIMED_OUT` when the search stopped first.
     """
     sources = np.full(1, source, np.int64)
-    n_touched, timed_out = _search(graph, costs, layer, sources, target, blocked, guide,
-                                   stop, work)
+    n_touched, timed_out = _search(graph, costs, layer, sources, target, blocked, corridor,
+                                   guide, stop, work)
     g, pred, closed = work.g, work.pred, work.closed
     cost = TIMED_OUT if timed_out else g[target]
     count = 0

@@ -27,6 +27,12 @@ roadmap's :class:`~.index.CellSearchIndex`, built once; a clearance or weight
 the index lacks is computed on first use and kept by the planner.  Searches
 run outside the interpreter's lock, each on work arrays of its thread, so
 requests in several threads plan at once.
+
+On a full 3-DOF roadmap, whose few large patches fold, the estimates fall
+far below the costs where a way folds back, and a least-cost search settles
+a hundred thousand nodes for a path of two hundred cells; there a coarse
+graph's path marks a corridor that the search keeps to first
+(:mod:`~.corridor`).
 """
 
 from dataclasses import dataclass
@@ -38,11 +44,12 @@ import threading
 import numpy as np
 
 from .astar import TIMED_OUT, UNREACHED, Guide, NodeCosts, Stop, layered_astar, work_arrays
+from .corridor import clear_corridor, coarse_graph, mark_corridor
 from .index import COST_UNITS, LOW_MARGIN_FACTOR, patch_costs, patch_depth, patch_gate_distances
 from .termination import NEVER
 from ..exceptions import InfeasiblePathError, InvalidInputError, PlanningTimeoutError
 
-__all__ = ["CellSearch", "CellPath", "DEFAULT_CLEARANCE_WEIGHT"]
+__all__ = ["CellSearch", "CellPath", "DEFAULT_CLEARANCE_WEIGHT", "CORRIDOR_MIN_NODES"]
 
 DEFAULT_CLEARANCE_WEIGHT = 0.0
 # Clearances outside the index whose gate distances a planner keeps (a full
@@ -50,6 +57,13 @@ DEFAULT_CLEARANCE_WEIGHT = 0.0
 _KEPT_CLEARANCES = 4
 # Scenes whose node margins a planner keeps (a full 3-DOF roadmap's take 24 MB each).
 _KEPT_SCENES = 2
+CORRIDOR_MIN_NODES = 1_000_000
+"""Node graphs from this size on are searched in a corridor first
+(:mod:`~.corridor`): a full 3-DOF roadmap's millions of nodes, not a slice's
+hundreds of thousands, whose least-cost searches take a millisecond or two."""
+# Side of a corridor's blocks [finest grid steps]: about a hundred nodes a
+# block on the full 3-DOF roadmap.
+_CORRIDOR_BLOCK = 8
 
 
 @dataclass(frozen=True)
@@ -83,9 +97,13 @@ class CellSearch:
     roadmap : Roadmap
     index : CellSearchIndex
         The roadmap's (:meth:`~.index.CellSearchIndex.build`).
+    corridor_min_nodes : int
+        Node graphs of at least this many nodes are searched in a corridor
+        first (:meth:`search`); building their coarse graph takes about half
+        a second on the full 3-DOF roadmap.
     """
 
-    def __init__(self, roadmap, index):
+    def __init__(self, roadmap, index, corridor_min_nodes=CORRIDOR_MIN_NODES):
         self.segmentation = roadmap.segmentation
         self.index = index
         # Gate distances and node costs the index lacks, filled patch by
@@ -96,6 +114,17 @@ class CellSearch:
         self._crossings = {}
         self._scenes = {}
         self._work = threading.local()
+        self._coarse = None
+        graph = index.graph
+        if index.n_nodes >= corridor_min_nodes:
+            finest = 2 * int(graph.quanta[graph.quanta > 0].min())
+            self._coarse = coarse_graph(graph, _CORRIDOR_BLOCK * finest)
+            n_coarse = self._coarse.graph.node_patch.size
+            self._coarse_costs = NodeCosts(np.ones(n_coarse, np.int64), np.ones(n_coarse),
+                                           0.0, 1)
+            # Gate distances of nought: the coarse search's estimate is the
+            # straight length alone, in every layer.
+            self._coarse_fields = np.zeros(n_coarse, np.int64)
 
     def _costs(self, weight, k):
         """The node costs for a clearance weight, with those of the patch at
@@ -135,6 +164,70 @@ class CellSearch:
             work = self._work.arrays = work_arrays(self.index.n_nodes,
                                                    self.index.graph.indices.size)
         return work
+
+    def _corridor_arrays(self):
+        """This thread's corridor marks (all zero between searches) and the
+        work arrays of its coarse searches."""
+        arrays = getattr(self._work, "corridor", None)
+        if arrays is None:
+            coarse = self._coarse.graph
+            arrays = self._work.corridor = (
+                np.zeros(self.index.n_nodes, np.uint8),
+                work_arrays(coarse.node_patch.size, coarse.indices.size))
+        return arrays
+
+    def _astar(self, costs, layer, source, target, blocked, guide, stop, world):
+        """:func:`~.astar.layered_astar` on the node graph, in a corridor first
+        where the graph has a coarse one and no scene blocks nodes (which
+        the coarse graph does not know).
+
+        The corridor's coarse path avoids the coarse nodes that hold blocked
+        cells.  A search with blocked cells (a repair, around a step the
+        motion checker refused) that finds no way in its corridor ends
+        there, as if the blocked cells cut the patches: on the whole graph
+        it could settle every node of a patch to prove it.
+        """
+        graph, work = self.index.graph, self._work_arrays()
+        everywhere = np.zeros(0, np.uint8)
+        if self._coarse is None or world is not None:
+            return layered_astar(graph, costs, layer, source, target, blocked, everywhere,
+                                 guide, stop, work)
+        corridor, coarse_work = self._corridor_arrays()
+        coarse_of = self._coarse.coarse_of
+        ends = (int(coarse_of[source]), int(coarse_of[target]))
+        empty = np.zeros(0, np.int64)
+        layers = np.zeros(int(layer.max()) + 1, np.int64)
+        path, _ = layered_astar(
+            self._coarse.graph, self._coarse_costs, layer, *ends,
+            np.setdiff1d(coarse_of[self._nodes_of(blocked, layer)], ends), everywhere,
+            Guide(1, self._coarse_fields, layers, layers, empty, empty),
+            Stop(stop.deadline, 2**62), coarse_work)
+        if path.size:
+            marked = mark_corridor(self._coarse, path, corridor)
+            try:
+                nodes, cost = layered_astar(graph, costs, layer, source, target, blocked,
+                                            corridor, guide, stop, work)
+            finally:
+                clear_corridor(self._coarse, marked, corridor)
+            if nodes.size or cost == TIMED_OUT:
+                return nodes, cost
+        if blocked.size:
+            return np.zeros(0, np.int64), UNREACHED
+        return layered_astar(graph, costs, layer, source, target, blocked, everywhere, guide,
+                             stop, work)
+
+    def _nodes_of(self, cells, layer):
+        """The nodes of the cells (ascending) in the patches with a layer."""
+        if not cells.size:
+            return np.zeros(0, np.int64)
+        offsets, node_cell = self.index.offsets, self.index.graph.node_cell
+        found = []
+        for k in np.flatnonzero(layer >= 0).tolist():
+            ours = node_cell[offsets[k]:offsets[k + 1]]
+            at = np.minimum(np.searchsorted(ours, cells), max(ours.size - 1, 0))
+            hit = ours[at] == cells if ours.size else np.zeros(cells.size, bool)
+            found.append(offsets[k] + at[hit])
+        return np.concatenate(found).astype(np.int64)
 
     def _fields(self, clearance):
         """The gate distances of a clearance (module doc of :mod:`~.astar`) and
@@ -349,6 +442,13 @@ class CellSearch:
         """Best cell path from a start cell to a goal cell through given patches,
         or through any.
 
+        On a node graph of at least ``corridor_min_nodes`` nodes, outside a
+        scene, the search keeps to a corridor first (:mod:`~.corridor`): its
+        path is the least-cost one of the corridor, and where the corridor
+        holds none, of the whole graph; but a search with blocked cells that
+        finds no way in its corridor raises ``InfeasiblePathError`` as if
+        the blocked cells cut the patches.
+
         Parameters
         ----------
         patches : sequence of int
@@ -419,12 +519,11 @@ class CellSearch:
                 patches, start_cell, goal_cell, weight, clearance)
         graph = self.index.graph
         margins = self.index.node_margin if world is None else self._scene_margins(world)
-        nodes, cost = layered_astar(
-            graph, NodeCosts(costs, margins, clearance, LOW_MARGIN_FACTOR),
-            layer, source, target, blocked,
-            guide._replace(cost_floor=guide.cost_floor * int(inflation)),
+        nodes, cost = self._astar(
+            NodeCosts(costs, margins, clearance, LOW_MARGIN_FACTOR), layer, source, target,
+            blocked, guide._replace(cost_floor=guide.cost_floor * int(inflation)),
             Stop(termination.deadline, 2**62 if most_settled is None else int(most_settled)),
-            self._work_arrays())
+            world)
         if cost == TIMED_OUT:
             where = f"the local search through patches {'any' if any_gates else patches}"
             if termination():

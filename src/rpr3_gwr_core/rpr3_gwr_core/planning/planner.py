@@ -157,8 +157,11 @@ class Planner:
     def warm_up(self):
         """Load every compiled kernel a plan can use (or, on a cold numba
         cache, compile them: seconds) now rather than during a first
-        request: a plan inside the first patch, smoothed and timed, and a
-        segment test for the corners that plan may not have.
+        request: a plan inside the first patch, smoothed and timed, a
+        segment test for the corners that plan may not have, and the least
+        costs across each patch between its gates at the default clearance
+        (for :meth:`~.cell_search.CellSearch.cheapest_patches`: tens of
+        milliseconds on a full 3-DOF roadmap).
 
         """
         seg = self.roadmap.segmentation
@@ -175,6 +178,9 @@ class Planner:
             pass  # the kernels it reached are loaded all the same
         joints = self.roadmap.grid.joints_at(cells)
         self.simplifier.segments_clear(joints[:1], joints[1:], [patch.id], [0.0])
+        for (a, b), gate in itertools.islice(seg.gates.items(), 1):
+            self.cell_search.cheapest_patches(a, int(gate.faces[0, 0]), b,
+                                              int(gate.faces[0, 1]), DEFAULT_CLEARANCE)
 
     def locate(self, configuration, mode_tol=DEFAULT_MODE_TOL):
         """:func:`~rpr3_gwr_core.planning.locate.locate` of a configuration:

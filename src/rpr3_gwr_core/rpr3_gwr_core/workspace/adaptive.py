@@ -364,9 +364,11 @@ class AdaptiveGrid(GridBase):
         steps = np.array(self.steps)
         here = (self._wrapped([joints[a.joint] for a in self.axes]) - low) / steps
         reach = int(math.ceil(radius))
-        fine = np.rint(here).astype(np.int64) + lattice_box(d, -reach, reach)
+        centre = np.rint(here).astype(np.int64)
+        fine = centre + lattice_box(d, -reach, reach)
         base = (np.floor(here / r).astype(np.int64) + lattice_box(d, -1, 2)) * r
-        index = np.unique(np.vstack([fine, base]), axis=0)
+        # The points of the fine box once: the base points outside it join them.
+        index = np.vstack([fine, base[np.any(np.abs(base - centre) > reach, axis=1)]])
         shape = np.array(self.fine_shape)
         index = index[np.all(self._periodic | ((index >= 0) & (index < shape)), axis=1)]
         distance = np.linalg.norm(index - here, axis=1)
