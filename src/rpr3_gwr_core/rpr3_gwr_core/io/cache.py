@@ -107,7 +107,7 @@ __all__ = ["CacheWarning", "DEFAULT_MAX_BYTES", "STALE_STAGING_SECONDS", "defaul
 ALGORITHM_REVISION = 5
 # Bump when the files of an entry, or what its planning index holds, change, so
 # old entries are misses (evicted in their turn) rather than damaged entries.
-ENTRY_LAYOUT = 7
+ENTRY_LAYOUT = 8
 
 DEFAULT_MAX_BYTES = 4 * 2**30
 """Default bound of the cache's entries [bytes]."""

@@ -24,6 +24,7 @@ import numpy as np
 
 from .astar import (NodeCosts, NodeGraph, adjacency, edge_quanta, gate_distances, gate_nodes,
                     node_positions, work_arrays)
+from .link_margins import LinkEnds, link_margins
 from ..exceptions import InvalidInputError
 from ..workspace.segmentation import linked_solutions
 
@@ -67,7 +68,9 @@ class CellSearchIndex:
     node_slot : ndarray of int64, shape (N,)
         Solution slot of each node in its cell.
     node_margin : ndarray of float64, shape (N,)
-        Margin magnitude (normalised ``|det Jx|``) of each node's solution.
+        Margin magnitude (normalised ``|det Jx|``) of each node's solution,
+        or less where one of its links dips between the cell centres
+        (:func:`~.link_margins.link_margins`).
     quantum : float
         The searches' length unit [joint unit] (:func:`~.astar.edge_quanta`).
     gate_pairs : ndarray of int64, shape (E, 2)
@@ -262,6 +265,13 @@ def _graph_arrays(roadmap):
     coordinates = grid.coordinates_of(node_cell)
     position = node_positions(coordinates, quantum)
     turn = np.rint(2.0 * grid.periods / quantum).astype(np.int64)
+    mechanism = roadmap.mechanism
+    node_margin = link_margins(mechanism, LinkEnds(
+        indptr, indices, np.ascontiguousarray(roadmap.grid.joints_at(node_cell), dtype=float),
+        _joint_periods(roadmap.grid),
+        np.ascontiguousarray(seg.field.poses[node_cell, node_slot], dtype=float),
+        np.ascontiguousarray(seg.field.margin[node_cell, node_slot], dtype=float),
+        np.array(mechanism.angular, dtype=np.bool_)))
     index_of = {pid: k for k, pid in enumerate(pids.tolist())}
     pairs = sorted({(index_of[a], index_of[b]) for a, b in seg.gates}
                    | {(index_of[b], index_of[a]) for a, b in seg.gates})
@@ -274,7 +284,7 @@ def _graph_arrays(roadmap):
     return {
         "pids": pids, "offsets": offsets, "node_cell": node_cell, "node_slot": node_slot,
         "node_patch": node_patch,
-        "node_margin": np.abs(seg.field.margin[node_cell, node_slot]).astype(np.float64),
+        "node_margin": node_margin,
         "indptr": indptr, "indices": indices,
         "quanta": edge_quanta(indptr, indices, position, turn), "position": position,
         "turn": turn,
@@ -289,6 +299,13 @@ def _graph_arrays(roadmap):
                                           max(pid_of[k], pid_of[other])]
                                   for k, other in pairs]).reshape(-1, grid.ndim),
     }
+
+
+def _joint_periods(grid):
+    """The period of each joint along the grid [joint unit], 0 where it has none."""
+    periods = np.zeros(grid.n_joints)
+    periods[list(grid.axis_joints)] = grid.periods
+    return periods
 
 
 def _no_tables(n_nodes, n_patches):
