@@ -8,7 +8,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from ..workspace.grid import lattice_cell
+from ..workspace.grid import lattice_point_cell, lattice_points
 
 __all__ = ["Sheets", "segments_clear", "shortcut_path"]
 
@@ -163,12 +163,19 @@ def _clear_through(a, b, route, floor, sheets, point):
     count = max(2, int(span * sheets.samples_per_step) + 1)
     at = 0
     previous, previous_slot = -1, -1
+    # Samples run several to a cell: a cell's lookup, a search of the
+    # lattice's index, is made once per run of them.
+    cell, flat, base = -1, -1, -1
     for n in range(count):
         t = n / (count - 1)
         point[:] = a * (1 - t) + b * t
-        cell = lattice_cell(point, low, steps, shape, index, base_steps, refinement, periods)
-        if cell < 0:
+        here, here_base = lattice_points(point, low, steps, shape, base_steps, refinement,
+                                         periods)
+        if here < 0:
             return False
+        if here != flat or here_base != base:
+            flat, base = here, here_base
+            cell = lattice_point_cell(flat, base, index)
         slot = _slot(sheets, cell, route[at], floor)
         if slot < 0:
             following = at

@@ -26,7 +26,7 @@ from ..exceptions import GridSizeError, InvalidInputError, OutOfGridError
 from .continuity import neighbour_pairs
 
 __all__ = ["Axis", "GridBase", "Grid", "MAX_GRID_CELLS", "check_roadmap_grid", "lattice_box",
-           "lattice_cell", "box_points", "within_box"]
+           "lattice_cell", "lattice_points", "lattice_point_cell", "box_points", "within_box"]
 
 # Most cells of any grid, about 4 million (2000 x 2000): a roadmap build
 # takes about 0.75 kB per cell at its peak (a process building a 1001 x 1001
@@ -675,6 +675,16 @@ def lattice_cell(point, low, steps, shape, index, base_steps, refinement, period
     point), which are always cells; ``periods`` the period of each axis
     (0: none), along which the point is wrapped first.
     """
+    flat, base = lattice_points(point, low, steps, shape, base_steps, refinement, periods)
+    return -1 if flat < 0 else lattice_point_cell(flat, base, index)
+
+
+@numba.njit(cache=True, inline="always")
+def lattice_points(point, low, steps, shape, base_steps, refinement, periods):
+    """The flat lattice indices of a point's nearest lattice point and of its
+    nearest base point, on which alone its cell depends
+    (:func:`lattice_point_cell`); ``(-1, -1)`` outside.  Arguments as
+    :func:`lattice_cell`'s."""
     flat = 0
     coarse = 0
     for k in range(point.size):
@@ -685,7 +695,7 @@ def lattice_cell(point, low, steps, shape, index, base_steps, refinement, period
         nearest = np.rint((value - low[k]) / steps[k])
         # Compared as floats: NaN and huge values fall outside.
         if not 0.0 <= nearest <= shape[k] - 1:
-            return -1
+            return -1, -1
         flat = flat * shape[k] + int(nearest)
         base = np.rint((value - low[k]) / base_steps[k])
         if periods[k] > 0:
@@ -695,12 +705,19 @@ def lattice_cell(point, low, steps, shape, index, base_steps, refinement, period
         else:
             base = min(max(base, 0.0), float((shape[k] - 1) // refinement))
         coarse = coarse * shape[k] + int(base) * refinement
+    return flat, coarse
+
+
+@numba.njit(cache=True, inline="always")
+def lattice_point_cell(flat, base, index):
+    """The cell of the lattice points of :func:`lattice_points`: the nearest
+    lattice point's where it is a cell, else the base point's."""
     if index.size == 0:
         return flat
     j = np.searchsorted(index, flat)
     if j < index.size and index[j] == flat:
         return j
-    return np.searchsorted(index, coarse)
+    return np.searchsorted(index, base)
 
 
 @numba.njit(cache=True)
