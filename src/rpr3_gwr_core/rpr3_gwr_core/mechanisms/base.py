@@ -444,6 +444,12 @@ class Mechanism(abc.ABC):
 
     def pose_difference(self, a, b):
         """``a - b`` with angles wrapped and measured as arc length at ``scale``."""
+        a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+        if a.ndim == 1 and a.shape == b.shape:
+            # Two poses, as the validator compares at every path's end:
+            # broadcasting them would cost more than the difference.
+            return _pose_differences(a[None], b[None], np.array(self.angular, dtype=bool),
+                                     float(self.scale))[0]
         shape, a, b = _pose_rows(a, b)
         return _pose_differences(a, b, np.array(self.angular, dtype=bool),
                                  float(self.scale)).reshape(shape)

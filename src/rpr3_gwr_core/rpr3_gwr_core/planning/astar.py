@@ -372,14 +372,14 @@ def _search(graph, costs, layer, sources, target, blocked, corridor, guide, stop
         cost_u = _node_cost(node_cost, node_margin, clearance, penalty, u)
         for e in range(indptr[u], indptr[u + 1]):
             v = indices[e]
-            if closed[v]:
+            # The corridor's marks first: of the node's own arrays, a search
+            # kept to a corridor then reads only those of the nodes in it.
+            if closed[v] or (corridor.size and corridor[v] == 0):
                 continue
             there = layer[node_patch[v]]
             if there < 0 or (there != here and there != here + 1) or node_margin[v] < 0:
                 continue
             if blocked.size and _is_blocked(blocked, node_cell[v]):
-                continue
-            if corridor.size and corridor[v] == 0:
                 continue
             reach = g[u] + quanta[e] * (cost_u + _node_cost(node_cost, node_margin, clearance,
                                                             penalty, v))
