@@ -5,14 +5,15 @@ The roadmap knows the margin at cell centres only.  Between two of them a
 solution sheet can fold over a singular sliver thinner than a cell, or dip
 next to a cusp, and a path along that link is then refused by the motion
 checker and repaired round it, the bulk of the work of the slowest plans.
-One predictor-corrector step of the mechanism (:attr:`Mechanism.step_kernel`)
-from one end of a link to its middle, and one on to the other end, find most
-such links before any plan: a link *dips* when a step fails, the second
-lands on another solution than the far end's, the margin changes sign, or
-the middle's margin magnitude falls below :data:`DIP_FRACTION` of the
-lesser end's (along a link of a smooth sheet it stays near the ends' mean).
-Both ends of a dipping link read the middle's margin (0 where a step
-failed), so the searches' low-margin cost keeps paths off it.
+The platform followed from one cell centre to the other with the
+mechanism's predictor-corrector step (:attr:`Mechanism.step_kernel`), in
+two halves, a step it refuses retried shorter as the validator does, finds
+most such links before any plan: a link *dips* when the platform cannot
+follow it, lands on another solution than the far end's, changes the sign
+of its margin, or keeps less than :data:`DIP_FRACTION` of the lesser end's
+margin magnitude (along a link of a smooth sheet it stays near the ends'
+mean).  Both ends of a dipping link read the least margin met inside it (0 where
+it cannot be followed), so the searches' low-margin cost keeps paths off it.
 
 This weighs the searches only: the links themselves, and so the roadmap's
 answers, stay as they are, and the motion checker still decides every path.
@@ -99,6 +100,7 @@ def _lower_at_dips(step, parameters, ends, scale, lowest):
     met inside it (0 where it cannot be followed)."""
     indptr, indices, joints, periods, poses, margin, angular = ends
     pose = np.empty(poses.shape[1])
+    trial = np.empty(poses.shape[1])
     start = np.empty(joints.shape[1])
     change = np.empty(joints.shape[1])
     here = np.empty(joints.shape[1])
@@ -115,7 +117,7 @@ def _lower_at_dips(step, parameters, ends, scale, lowest):
                     change[j] -= periods[j] * np.round(change[j] / periods[j])
             pose[:] = poses[u]
             kept = _followed_margin(step, parameters, pose, start, change, margin[u] > 0,
-                                    here, there)
+                                    here, there, trial)
             if kept > 0.0 and _distance(pose, poses[v], angular, scale) > _LANDING_TOL * scale:
                 kept = 0.0
             if kept < DIP_FRACTION * min(abs(margin[u]), abs(margin[v])):
@@ -124,19 +126,20 @@ def _lower_at_dips(step, parameters, ends, scale, lowest):
 
 
 @numba.njit(cache=True, inline="always")
-def _followed_margin(step, parameters, pose, start, change, positive, here, there):
+def _followed_margin(step, parameters, pose, start, change, positive, here, there, trial):
     """Follow ``pose`` from ``start`` along ``change`` in two halves, a refused
     step retried in halves down to ``_FINEST_STEP`` of the link (each step
     after a success twice as long); returns the least margin magnitude met
     inside, or 0 where a step that short is refused or the margin changes
-    sign."""
+    sign; ``here``, ``there`` and ``trial`` are work space."""
     least = np.inf
     done, h = 0.0, 0.5
     while done < 1.0:
         h = min(h, 1.0 - done)
-        here[:] = start + change * done
-        there[:] = start + change * (done + h)
-        trial = pose.copy()
+        for j in range(start.size):
+            here[j] = start[j] + change[j] * done
+            there[j] = start[j] + change[j] * (done + h)
+        trial[:] = pose
         stepped = step(parameters, trial, here, there)
         if np.isnan(stepped):
             if h <= _FINEST_STEP:
