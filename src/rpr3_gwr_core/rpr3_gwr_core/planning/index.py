@@ -9,7 +9,7 @@ which guide the searches (:mod:`~.astar`); and the centroids of the patches
 and the middles of their gates, which weigh the global search's edges
 (:class:`~.global_planning.PatchGraph`).  The gate distances and the
 nodes' margins along their links (:mod:`~.link_margins`) are most of the
-work of building one: 13 s on the full 3-DOF roadmap (5 of them the links'),
+work of building one: 10.5 s on the full 3-DOF roadmap (3.5 of them the links'),
 half a second on the paper's slice.
 
 An index is plain named arrays (:meth:`CellSearchIndex.arrays`,
