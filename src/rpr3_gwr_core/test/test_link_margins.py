@@ -21,11 +21,11 @@ from rpr3_gwr_core.workspace.roadmap import build_roadmap
 
 CONFIG = pathlib.Path(__file__).resolve().parents[3] / "config"
 
-# Where the least-cost ways between these pairs of the full roadmap ran when
-# the searches read the cell centres' margins alone: across a link over
-# which the sheet folds (the first pair; the platform cannot follow it from
-# one cell centre to the other) or dips to a fifth of its ends' margins (the
-# second), so the motion checker refused both cell paths.
+# Pairs whose least-cost ways, on the cell centres' margins alone, cross a
+# link over which the sheet folds (the first pair: the platform cannot
+# follow it from one cell centre to the other) or dips to a fifth of its
+# ends' margins (the second), so that the motion checker refuses both cell
+# paths.
 FOLDED_WAYS = [
     ((14.15332319230562, 16.067184360952666, 29.740855993582887, -0.19308822856563745),
      (14.185606064006135, 10.26581888665126, 12.731883348227026, 1.6273097014865279),
