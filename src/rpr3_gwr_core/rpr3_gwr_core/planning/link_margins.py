@@ -24,6 +24,8 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
+from ..mechanisms.base import compiled_pose_distance
+
 __all__ = ["LinkEnds", "link_margins", "DIP_FRACTION"]
 
 DIP_FRACTION = 0.5
@@ -118,7 +120,8 @@ def _lower_at_dips(step, parameters, ends, scale, lowest):
             pose[:] = poses[u]
             kept = _followed_margin(step, parameters, pose, start, change, margin[u] > 0,
                                     here, there, trial)
-            if kept > 0.0 and _distance(pose, poses[v], angular, scale) > _LANDING_TOL * scale:
+            if kept > 0.0 and (compiled_pose_distance(pose, poses[v], angular, scale)
+                               > _LANDING_TOL * scale):
                 kept = 0.0
             if kept < DIP_FRACTION * min(abs(margin[u]), abs(margin[v])):
                 lowest[u] = min(lowest[u], kept)
@@ -154,15 +157,3 @@ def _followed_margin(step, parameters, pose, start, change, positive, here, ther
             least = min(least, abs(stepped))
         h *= 2.0
     return least
-
-
-@numba.njit(cache=True, inline="always")
-def _distance(a, b, angular, scale):
-    """Distance of two poses, angles as arcs at ``scale``, the short way round."""
-    total = 0.0
-    for k in range(a.size):
-        d = a[k] - b[k]
-        if angular[k]:
-            d = (np.pi - np.remainder(np.pi - d, 2 * np.pi)) * scale
-        total += d * d
-    return np.sqrt(total)
