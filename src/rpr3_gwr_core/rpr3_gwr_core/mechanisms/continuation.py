@@ -52,7 +52,7 @@ MIN_JOINT_STEP = 1e-10
 FOLLOWED, CANNOT_FOLLOW, CROSSED, TOO_CLOSE = range(4)
 
 
-def follow_path(mechanism, path, pose, min_margin, max_step, poses=None):
+def follow_path(mechanism, path, pose, min_margin, max_step, poses=None, trace=None):
     """Follow the platform from ``pose`` along a joint path.
 
     Parameters
@@ -70,6 +70,11 @@ def follow_path(mechanism, path, pose, min_margin, max_step, poses=None):
         Largest joint change of one step [joint unit].
     poses : ndarray of float, shape (n, pose_size), optional
         Receives the pose at each waypoint reached, angles wrapped.
+    trace : ndarray of float, shape (n - 1, 2), optional
+        Receives, for each segment followed (row k - 1 for the segment from
+        waypoint k - 1 to k, the one where following stopped included), the
+        smallest margin magnitude met on it, its start included, and the
+        steps taken on it.
 
     Returns
     -------
@@ -86,6 +91,8 @@ def follow_path(mechanism, path, pose, min_margin, max_step, poses=None):
     """
     if poses is None:
         poses = np.empty((path.shape[0], pose.size))
+    if trace is None:
+        trace = np.empty((max(path.shape[0] - 1, 0), 2))
     margin = float(mechanism.margin(pose, path[0]))
     kernel, parameters = mechanism.step_kernel or (None, None)
     follow = _follow
@@ -93,7 +100,7 @@ def follow_path(mechanism, path, pose, min_margin, max_step, poses=None):
         follow, kernel, parameters = _follow.py_func, _interpreted_kernel(mechanism), np.empty(0)
     limits = np.array([mechanism.scale, max_step, min_margin])
     return follow(kernel, parameters, path, pose, margin, np.array(mechanism.angular, np.bool_),
-                  limits, poses)
+                  limits, poses, trace)
 
 
 def _interpreted_kernel(mechanism):
@@ -110,8 +117,8 @@ def _interpreted_kernel(mechanism):
 @numba.njit(types.Tuple((types.int64, types.int64, types.int64, types.float64))(
     types.FunctionType(STEP_KERNEL_SIGNATURE), types.float64[::1], types.float64[:, ::1],
     types.float64[::1], types.float64, types.boolean[::1], types.float64[::1],
-    types.float64[:, ::1]), cache=True, nogil=True)
-def _follow(step, parameters, path, pose, margin, angular, limits, poses):
+    types.float64[:, ::1], types.float64[:, ::1]), cache=True, nogil=True)
+def _follow(step, parameters, path, pose, margin, angular, limits, poses, trace):
     """:func:`follow_path`'s loop; ``limits`` is ``(scale, max_step, min_margin)``."""
     scale, max_step, min_margin = limits[0], limits[1], limits[2]
     positive = margin > 0
@@ -123,6 +130,7 @@ def _follow(step, parameters, path, pose, margin, angular, limits, poses):
         start, end = path[k - 1], path[k]
         span = np.max(np.abs(end - start))
         done, h = 0.0, 1.0 if span == 0.0 else min(1.0, max_step / span)
+        trace[k - 1, 0], trace[k - 1, 1] = abs(margin), 0.0
         while done < 1.0:
             h = min(h, 1.0 - done)
             trial[:] = pose
@@ -149,8 +157,11 @@ def _follow(step, parameters, path, pose, margin, angular, limits, poses):
             done += h
             h = min(h * min(2.0, 0.8 * fit), 1.0 if span == 0.0 else max_step / span)
             steps += 1
+            trace[k - 1, 1] += 1.0
             if (margin > 0) != positive:
+                trace[k - 1, 0] = 0.0
                 return CROSSED, k, steps, 0.0
+            trace[k - 1, 0] = min(trace[k - 1, 0], abs(margin))
             smallest = min(smallest, abs(margin))
             if smallest < min_margin:
                 return TOO_CLOSE, k, steps, smallest

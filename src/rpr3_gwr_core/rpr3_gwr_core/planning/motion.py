@@ -45,7 +45,7 @@ class MotionChecker:
         self.max_step = float(max_step)
         self._free = list(roadmap.grid.axis_joints)
 
-    def check(self, joints, problem, min_margin):
+    def check(self, joints, problem, min_margin, known=None):
         """:meth:`check_between` the problem's located start and goal, in its scene.
 
         Parameters
@@ -55,15 +55,17 @@ class MotionChecker:
         problem : PlanningProblem
         min_margin : float
             Smallest margin magnitude accepted along the path.
+        known : (Validation, int), optional
+            As :meth:`check_between`'s.
 
         Returns
         -------
         Validation
         """
         return self.check_between(joints, problem.start.pose, problem.goal.pose, min_margin,
-                                  problem.world)
+                                  problem.world, known)
 
-    def check_between(self, joints, start_pose, goal_pose, min_margin, world=None):
+    def check_between(self, joints, start_pose, goal_pose, min_margin, world=None, known=None):
         """The validator's verdict on ``joints`` followed from ``start_pose``
         to ``goal_pose`` and, in a scene, the continuous collision check's: a
         path that collides fails at the segment where it does.
@@ -77,6 +79,11 @@ class MotionChecker:
         min_margin : float
             Smallest margin magnitude accepted along the path.
         world : SceneRoadmap, optional
+        known : (Validation, int), optional
+            This checker's earlier verdict on a path from the same start
+            whose first ``k + 1`` waypoints are these, and ``k``: the
+            validator resumes there (:func:`~.validation.validate_path`);
+            the collision check covers the whole path all the same.
 
         Returns
         -------
@@ -84,7 +91,7 @@ class MotionChecker:
         """
         mechanism = self.roadmap.mechanism
         result = validate_path(mechanism, joints, start_pose, goal_pose, min_margin,
-                               self.max_step)
+                               self.max_step, known)
         if not result.ok or world is None:
             return result
         from ..world import path_collisions  # the world's kernels load only with a scene
@@ -94,6 +101,29 @@ class MotionChecker:
             return result
         return dataclasses.replace(result, ok=False, reason=f"collision {hit.message}",
                                    failed_segment=min(int(hit.index) + 1, len(joints) - 1))
+
+    def resumable(self, earlier, checked, joints):
+        """What :meth:`check_between`'s ``known`` is for ``joints`` after
+        ``earlier``, its verdict on ``checked`` from the same start at the
+        same margin: the last waypoint of the start they share that the
+        platform reached.
+
+        Parameters
+        ----------
+        earlier : Validation
+        checked, joints : ndarray, shape (m, n_joints) and (n, n_joints)
+            Waypoints [joint unit].
+
+        Returns
+        -------
+        (Validation, int) or None
+            None when they share no segment the platform was followed along.
+        """
+        shared = min(len(checked), len(joints))
+        differ = np.flatnonzero(np.any(checked[:shared] != joints[:shared], axis=1))
+        shared = int(differ[0]) if differ.size else shared
+        last = min(shared, earlier.reached()) - 1
+        return (earlier, last) if last >= 1 else None
 
     def check_free(self, location, which, world):
         """Refuse a located end that collides or breaks a limit of the scene.

@@ -233,8 +233,10 @@ class PathRepairer:
                 break  # the blocked cells cut the patches
             cells, cell_patches = cell_path
             joints, patches, origin = self.waypoints(problem, cells, cell_patches)
-            result, kept = self.simplifier.shortcut(joints, patches, problem, keep)
-            tried.append((joints, patches, kept))
+            result, kept = self.simplifier.shortcut(
+                joints, patches, problem, keep,
+                (tried[-1][3], tried[-1][0][tried[-1][2]]) if tried else None)
+            tried.append((joints, patches, kept, result))
             if result.ok:
                 return RepairedPath(result, joints[kept], patches[kept],
                                     crossed_patches(patches))
@@ -254,7 +256,7 @@ class PathRepairer:
         # Blocking steps can also lead somewhere worse: the last path, else
         # the first, if it keeps min_margin, shortcut as it was tried (it
         # missed only the clearance's quarter), else whole.
-        for joints, patches, kept in (tried[-1], tried[0])[:len(tried)]:
+        for joints, patches, kept, _ in (tried[-1], tried[0])[:len(tried)]:
             for waypoints in (kept, np.arange(len(joints))):
                 result = self.checker.check(joints[waypoints], problem, self.checker.min_margin)
                 if result.ok:

@@ -17,6 +17,7 @@ import numpy as np
 from ..exceptions import InvalidInputError, PlanningTimeoutError
 from .segments import Sheets, segments_clear, shortcut_path
 from .trajectory import corner_cuts, cut_corners
+from .validation import joined_validation, validation_part
 
 __all__ = ["PathSimplifier", "polyline_turns", "segment_floor"]
 
@@ -151,7 +152,7 @@ class PathSimplifier:
                              np.asarray(patches, dtype=np.int64), margins, clearance, split,
                              self._sheets)
 
-    def shortcut(self, joints, patches, problem, keep):
+    def shortcut(self, joints, patches, problem, keep, earlier=None):
         """The shortcut path's verdict and kept waypoints.
 
         A shortcut the motion checker refuses is replaced by shorter ones
@@ -168,6 +169,9 @@ class PathSimplifier:
         problem : PlanningProblem
         keep : float
             Margin the path must keep in the motion checker.
+        earlier : (Validation, ndarray), optional
+            The motion checker's verdict, at ``keep``, on other waypoints
+            from the same start: where they agree, it is not followed again.
 
         Returns
         -------
@@ -180,7 +184,9 @@ class PathSimplifier:
         if len(joints) > 2:
             kept = self._shortcut(joints, patches, margins, problem.clearance)
         for attempt in range(self.split_shortcuts + 2):
-            result = self.checker.check(joints[kept], problem, keep)
+            known = None if earlier is None else self.checker.resumable(*earlier, joints[kept])
+            result = self.checker.check(joints[kept], problem, keep, known)
+            earlier = result, joints[kept]
             k = self.checker.failed_segment(result, joints[kept], patches[kept])
             if result.ok or k < 1 or kept[k] - kept[k - 1] == 1:
                 break
@@ -227,10 +233,15 @@ class PathSimplifier:
         poses = result.poses
         margins = np.abs(mechanism.margin(poses, joints))
 
+        passed = {}
+
         def straight(a, b):
             floor = segment_floor(margins[a:b + 1], problem.clearance)
-            return self.checker.check_between(joints[[a, b]], poses[a], poses[b], floor,
-                                              problem.world).ok
+            verdict = self.checker.check_between(joints[[a, b]], poses[a], poses[b], floor,
+                                                 problem.world)
+            if verdict.ok:
+                passed[a, b] = verdict
+            return verdict.ok
 
         kept, at = [0], 0
         while at < len(joints) - 1:
@@ -249,9 +260,12 @@ class PathSimplifier:
             at = low
         if len(kept) == len(joints):
             return None
+        # Each jump passed on its own from the path's pose at its start to
+        # the pose at its end, and a step not jumped is the passed path's.
+        taut = joined_validation(passed.get((a, b)) or validation_part(result, a, b)
+                                 for a, b in zip(kept, kept[1:]))
         kept = np.array(kept)
-        taut = self.checker.check(joints[kept], problem, self.checker.min_margin)
-        return (taut, joints[kept], patches[kept]) if taut.ok else None
+        return taut, joints[kept], patches[kept]
 
     def round(self, joints, patches, problem, keep):
         """The path with its corners cut (Chaikin) where the cut keeps to the
