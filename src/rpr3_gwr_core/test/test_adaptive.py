@@ -77,6 +77,31 @@ def test_cells_of_and_nearby_cells(small_grid):
         grid.cell_of(np.array([math.nan, 12.0, 20.0]))
 
 
+def test_cells_near_are_the_cells_a_full_scan_finds_in_their_order(small_grid):
+    """The fine points around the point's nearest lattice point and the base
+    points of the blocks around it, within reach, nearest first, ties in
+    cell order."""
+    grid = small_grid
+    r, d = grid.refinement, grid.ndim
+    low, steps = np.array([a.low for a in grid.axes]), np.array(grid.steps)
+    index = np.rint((grid.coordinates() - low) / steps).astype(int)
+    cells = np.arange(grid.size)
+    rng = np.random.default_rng(2)
+    for _ in range(300):
+        point = rng.uniform([11.5, 9.5, 15.5], [20.5, 18.5, 24.5])
+        if rng.random() < 0.3:  # on lattice points and halfway between them
+            point = low + np.round((point - low) / steps * 2) / 2 * steps
+        radius = float(rng.choice([0.5, 1.0, 2.5, 4.0]))
+        here = (point - low) / steps
+        in_box = np.max(np.abs(index - np.rint(here)), axis=1) <= math.ceil(radius)
+        blocks = index // r - np.floor(here / r)
+        base = np.all(index % r == 0, axis=1) & np.all((blocks >= -1) & (blocks <= 2), axis=1)
+        distance = np.linalg.norm(index - here, axis=1)
+        found = (in_box | base) & (distance <= max(radius, r * math.sqrt(d)))
+        order = np.lexsort((cells[found], distance[found]))
+        assert grid.cells_near(point, radius) == cells[found][order].tolist()
+
+
 @pytest.mark.parametrize("which", ["adaptive", "uniform"])
 def test_cells_in_box_are_the_cells_a_full_scan_finds(small_grid, which):
     grid = small_grid if which == "adaptive" else small_grid.base

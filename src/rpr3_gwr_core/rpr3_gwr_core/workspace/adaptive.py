@@ -359,29 +359,12 @@ class AdaptiveGrid(GridBase):
         -------
         list of int
         """
-        r, d = self.refinement, self.ndim
         low = np.array([a.low for a in self.axes])
-        steps = np.array(self.steps)
-        here = (self._wrapped([joints[a.joint] for a in self.axes]) - low) / steps
+        here = (self._wrapped([joints[a.joint] for a in self.axes]) - low) / np.array(self.steps)
         reach = int(math.ceil(radius))
-        centre = np.rint(here).astype(np.int64)
-        fine = centre + lattice_box(d, -reach, reach)
-        base = (np.floor(here / r).astype(np.int64) + lattice_box(d, -1, 2)) * r
-        # The points of the fine box once: the base points outside it join them.
-        index = np.vstack([fine, base[np.any(np.abs(base - centre) > reach, axis=1)]])
-        shape = np.array(self.fine_shape)
-        index = index[np.all(self._periodic | ((index >= 0) & (index < shape)), axis=1)]
-        distance = np.linalg.norm(index - here, axis=1)
-        near = distance <= max(radius, r * math.sqrt(d))
-        # Around a periodic axis' seam, indices past either end wrap.
-        index = np.where(self._periodic, index % shape, index)
-        cells = self._lookup(np.ravel_multi_index(tuple(index[near].T), self.fine_shape))
-        distance = distance[near][cells >= 0]
-        cells = cells[cells >= 0]
-        cells = cells[np.lexsort((cells, distance))]
-        # A cell met on both sides of a seam is listed once, where nearest.
-        _, first = np.unique(cells, return_index=True)
-        return cells[np.sort(first)].tolist()
+        return _cells_near(here, float(radius), self.refinement, np.array(self.fine_shape),
+                           self._periodic, self._index, lattice_box(self.ndim, -reach, reach),
+                           lattice_box(self.ndim, -1, 2)).tolist()
 
     def to_dict(self):
         """Plain-data form, for JSON."""
@@ -395,6 +378,57 @@ class AdaptiveGrid(GridBase):
             return cls(Grid.from_dict(data["base"]), data["refinement"], data["blocks"])
         except (KeyError, TypeError, ValueError) as exc:
             raise InvalidInputError(f"malformed adaptive grid: {exc}") from exc
+
+
+@numba.njit(cache=True, nogil=True)
+def _cells_near(here, radius, refinement, shape, periodic, index, fine_box, base_box):
+    """:meth:`AdaptiveGrid.cells_near` of a point ``here`` in fine steps from
+    the lattice's low corner: the fine lattice points ``round(here) +
+    fine_box`` and the base points of the blocks ``floor(here / refinement)
+    + base_box`` that are cells (``index``: the cells' fine flat indices,
+    ascending), within ``max(radius, refinement * sqrt(ndim))`` fine steps,
+    nearest first, ties in cell order, each cell once."""
+    d = here.size
+    reach = fine_box[-1, 0]
+    limit = max(radius, refinement * math.sqrt(d))
+    centre = np.rint(here).astype(np.int64)
+    block = np.floor(here / refinement).astype(np.int64)
+    n_fine = fine_box.shape[0]
+    cells = np.empty(n_fine + base_box.shape[0], np.int64)
+    distance = np.empty(cells.size)
+    point = np.empty(d, np.int64)
+    count = 0
+    for k in range(cells.size):
+        outside = k < n_fine
+        for a in range(d):
+            point[a] = (centre[a] + fine_box[k, a] if k < n_fine
+                        else (block[a] + base_box[k - n_fine, a]) * refinement)
+            # A base point inside the fine box is one of its points already.
+            outside = outside or abs(point[a] - centre[a]) > reach
+        squared, flat, inside = 0.0, 0, outside
+        for a in range(d):
+            squared += (point[a] - here[a]) ** 2
+            i = point[a]
+            if periodic[a]:
+                i %= shape[a]
+            elif i < 0 or i >= shape[a]:
+                inside = False
+            flat = flat * shape[a] + i
+        if not inside or math.sqrt(squared) > limit:
+            continue
+        at = min(np.searchsorted(index, flat), index.size - 1)
+        if index[at] == flat:
+            cells[count], distance[count] = at, math.sqrt(squared)
+            count += 1
+    cells, distance = cells[:count], distance[:count]
+    # A cell met on both sides of a seam is listed once, where nearest.
+    by_distance = np.argsort(distance, kind="mergesort")
+    by_cell = by_distance[np.argsort(cells[by_distance], kind="mergesort")]
+    nearest = np.zeros(count, np.bool_)
+    for k in range(count):
+        nearest[by_cell[k]] = k == 0 or cells[by_cell[k]] != cells[by_cell[k - 1]]
+    order = by_cell[np.argsort(distance[by_cell], kind="mergesort")]
+    return cells[order[nearest[order]]]
 
 
 @numba.njit(cache=True, nogil=True)
