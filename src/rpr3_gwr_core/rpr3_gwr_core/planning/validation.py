@@ -224,7 +224,7 @@ def validate_path(mechanism, path, start_pose, goal_pose=None,
                                     f"{k} of a path of {n}")
         return _resumed(mechanism, path, earlier, k, goal_pose, min_margin, max_step, poses,
                         trace, result)
-    residual = float(np.max(np.abs(mechanism.residual(pose, path[0]))))
+    residual = _largest(mechanism.residual(pose, path[0]))
     if residual > 1e-6 * mechanism.scale**2:
         return result(False, f"start pose does not fit the first waypoint (residual "
                       f"{residual:.2e})", 0.0, 0)
@@ -277,8 +277,14 @@ def _verdict(mechanism, status, k, steps, smallest, sign, pose, goal_pose, min_m
         return result(False, f"margin {smallest:.2e} below {min_margin:g} before "
                       f"waypoint {k}", smallest, sign, steps, k)
     if goal_pose is not None:
-        miss = float(np.max(np.abs(mechanism.pose_difference(pose, goal_pose))))
+        miss = _largest(mechanism.pose_difference(pose, goal_pose))
         if miss > _GOAL_TOL * mechanism.scale:
             return result(False, f"platform ends {miss:.3g} away from the goal pose: "
                           "another assembly mode", smallest, sign, steps)
     return result(True, "ok", smallest, sign, steps)
+
+
+def _largest(values):
+    """The largest magnitude of a few values: on so few, a numpy reduction's
+    call costs several times the comparisons."""
+    return max(map(abs, np.ravel(values).tolist()))
