@@ -21,18 +21,19 @@ from rpr3_gwr_core.workspace.roadmap import build_roadmap
 
 CONFIG = pathlib.Path(__file__).resolve().parents[3] / "config"
 
-# Pairs whose least-cost ways, on the cell centres' margins alone, cross a
+# Pairs whose least-cost ways, on the cell centres' margins alone, crossed a
 # link over which the sheet folds (the first pair: the platform cannot
-# follow it from one cell centre to the other) or dips to a fifth of its
-# ends' margins (the second), so that the motion checker refuses both cell
-# paths.
+# follow it from one cell centre to the other, and the roadmap's continuity,
+# which follows it as the validator does, no longer links it) or dips to a
+# fifth of its ends' margins (the second: linked, and its nodes lowered), so
+# that the motion checker refused both cell paths.
 FOLDED_WAYS = [
     ((14.15332319230562, 16.067184360952666, 29.740855993582887, -0.19308822856563745),
      (14.185606064006135, 10.26581888665126, 12.731883348227026, 1.6273097014865279),
-     ((7.0, 15.0, 12.5), (7.0, 15.25, 12.5))),
+     ((7.0, 15.0, 12.5), (7.0, 15.25, 12.5)), False),
     ((48.46173510340648, 44.03442338692189, 47.52627271367191, 0.41375865579296445),
      (15.305124387550505, 12.20348810590452, 9.190602137081916, 1.8457294410124376),
-     ((28.5, 28.0, 13.25), (28.5, 27.75, 13.25))),
+     ((28.5, 28.0, 13.25), (28.5, 27.75, 13.25)), True),
 ]
 
 
@@ -85,18 +86,19 @@ def test_links_the_full_roadmap_keeps_do_not_dip_in_the_reference(full_planning)
     assert checked > 100
 
 
-@pytest.mark.parametrize("start, goal, link", FOLDED_WAYS)
+@pytest.mark.parametrize("start, goal, link, linked", FOLDED_WAYS)
 def test_a_way_once_refused_over_a_folding_link_now_keeps_off_it(full_planner, start, goal,
-                                                                  link):
+                                                                  link, linked):
     roadmap, index = full_planner.roadmap, full_planner.search_index
     plain = _plain_margins(roadmap, index)
     problem = PlanningProblem(full_planner.locate(start), full_planner.locate(goal), 0.02)
     s, g = problem.start, problem.goal
-    # The link's nodes that the reference finds dipping are lowered.
+    # The link's nodes that the reference finds dipping are lowered; a link
+    # the platform cannot follow is not made.
     nodes = np.flatnonzero(np.isin(index.graph.node_cell, roadmap.grid.cells_of(np.array(link))))
     folded = [u for u in nodes.tolist() for v in _links(index, u)
               if v in nodes and _reference_dips(roadmap, index, u, v, plain)]
-    assert folded and all(index.node_margin[u] < plain[u] for u in folded)
+    assert bool(folded) == linked and all(index.node_margin[u] < plain[u] for u in folded)
     path = full_planner.cell_search.search((s.patch, g.patch), s.cell, g.cell,
                                            clearance=problem.clearance, any_gates=True)
     assert not set(folded) & set(_path_nodes(index, path).tolist())

@@ -104,7 +104,7 @@ __all__ = ["CacheWarning", "DEFAULT_MAX_BYTES", "STALE_STAGING_SECONDS", "defaul
            "find_cached_planning", "save_planning_files", "map_planning_files"]
 
 # Bump when a change of the algorithms changes roadmaps, so old entries are not reused.
-ALGORITHM_REVISION = 5
+ALGORITHM_REVISION = 6
 # Bump when the files of an entry, or what its planning index holds, change, so
 # old entries are misses (evicted in their turn) rather than damaged entries.
 ENTRY_LAYOUT = 8

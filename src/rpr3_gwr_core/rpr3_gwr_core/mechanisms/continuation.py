@@ -31,8 +31,9 @@ import numba
 from numba import types
 import numpy as np
 
-__all__ = ["follow_path", "STEP_KERNEL_SIGNATURE", "FOLLOWED", "CANNOT_FOLLOW", "CROSSED",
-           "TOO_CLOSE", "POSE_STEP", "MARGIN_CHANGE", "MIN_JOINT_STEP"]
+__all__ = ["follow_path", "follow_segments", "STEP_KERNEL_SIGNATURE", "FOLLOWED",
+           "CANNOT_FOLLOW", "CROSSED", "TOO_CLOSE", "POSE_STEP", "MARGIN_CHANGE",
+           "MIN_JOINT_STEP"]
 
 # ``margin = kernel(parameters, pose, joints_from, joints_to)``: one
 # predictor-corrector step that overwrites ``pose`` (its coordinates at
@@ -103,6 +104,43 @@ def follow_path(mechanism, path, pose, min_margin, max_step, poses=None, trace=N
                   limits, poses, trace)
 
 
+def follow_segments(mechanism, starts, ends, poses, min_margin, max_step=math.inf):
+    """Follow the platform along many straight joint segments, each from a
+    pose of its own: :func:`follow_path` of each, in one compiled loop.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+    starts, ends : ndarray of float, shape (m, n_joints)
+        Each segment's ends [joint unit].
+    poses : ndarray of float, shape (m, pose_size), C-contiguous
+        The pose at each segment's start, converged; overwritten with the
+        pose reached.
+    min_margin, max_step : float
+        As :func:`follow_path`'s.
+
+    Returns
+    -------
+    ndarray of int64, shape (m,)
+        Each segment's status (:func:`follow_path`).
+    """
+    starts = np.ascontiguousarray(starts, dtype=float)
+    ends = np.ascontiguousarray(ends, dtype=float)
+    status = np.empty(starts.shape[0], np.int64)
+    if starts.shape[0] == 0:
+        return status
+    margins = np.ascontiguousarray(mechanism.margin(poses, starts), dtype=float)
+    kernel, parameters = mechanism.step_kernel or (None, None)
+    follow = _follow_each
+    if kernel is None:
+        follow, kernel, parameters = (_follow_each.py_func, _interpreted_kernel(mechanism),
+                                      np.empty(0))
+    limits = np.array([mechanism.scale, max_step, min_margin])
+    follow(kernel, parameters, starts, ends, poses, margins,
+           np.array(mechanism.angular, np.bool_), limits, status)
+    return status
+
+
 def _interpreted_kernel(mechanism):
     """:meth:`Mechanism.step` with the step kernel's calling convention."""
     def kernel(parameters, pose, joints_from, joints_to):
@@ -170,3 +208,21 @@ def _follow(step, parameters, path, pose, margin, angular, limits, poses, trace)
             if angular[j]:
                 poses[k, j] = math.atan2(math.sin(pose[j]), math.cos(pose[j]))
     return FOLLOWED, -1, steps, smallest
+
+
+@numba.njit(types.void(
+    types.FunctionType(STEP_KERNEL_SIGNATURE), types.float64[::1], types.float64[:, ::1],
+    types.float64[:, ::1], types.float64[:, ::1], types.float64[::1], types.boolean[::1],
+    types.float64[::1], types.int64[::1]), cache=True, nogil=True)
+def _follow_each(step, parameters, starts, ends, poses, margins, angular, limits, status):
+    """:func:`follow_segments`' loop."""
+    path = np.empty((2, starts.shape[1]))
+    reached = np.empty((2, poses.shape[1]))
+    trace = np.empty((1, 2))
+    pose = np.empty(poses.shape[1])
+    for i in range(starts.shape[0]):
+        path[0], path[1] = starts[i], ends[i]
+        pose[:] = poses[i]
+        status[i] = _follow(step, parameters, path, pose, margins[i], angular, limits, reached,
+                            trace)[0]
+        poses[i] = pose

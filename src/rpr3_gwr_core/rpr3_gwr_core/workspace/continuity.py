@@ -2,13 +2,17 @@
 
 Two solutions of face-adjacent cells belong to the same sheet when the
 platform can follow the legs from one cell to the other without a jump: the
-pose of the first cell is carried to the neighbour's legs by an Euler
-predictor and Newton corrector on the constraint equations (continuity of
-*all* task variables x, y and alpha, so degenerate orientations, where two
-assembly modes share alpha, cannot merge sheets), and must land on a solution
-of the neighbour with the same aspect.  A link is kept only when the
-continuation works in both directions and the two directions agree, so the
-relation is a partial bijection and gates come out symmetric.
+pose of the first cell is carried to the neighbour's legs by the validator's
+continuation (:func:`~rpr3_gwr_core.mechanisms.continuation.follow_segments`:
+predictor-corrector steps of *all* task variables, so degenerate
+orientations, where two assembly modes share alpha, cannot merge sheets,
+each step short enough for its margin that the corrector cannot reach
+another branch), and must land on a solution of the neighbour with the same
+aspect.  A branch that ends in a fold inside the face, where a corrector
+left to itself lands on a solution born there, is not followed and links
+nothing.  A link is kept only when the continuation works in both
+directions and the two directions agree, so the relation is a partial
+bijection and gates come out symmetric.
 
 Most faces are far from any fold, and there the links are the identity on
 the ordered solutions: a compiled screen settles them first, with one Euler
@@ -22,13 +26,15 @@ import numba
 import numpy as np
 
 from ..mechanisms.base import compiled_pose_distance
+from ..mechanisms.continuation import FOLLOWED, follow_segments
 
 
 __all__ = ["neighbour_pairs", "match_solutions"]
 
 _CHUNK = 65536
-_CORRECTOR_STEPS = 4
-_SUBSTEPS = (1, 16)
+# The finest margin magnitude the continuation across a face resolves: a
+# solution that comes closer to the singular locus there is not linked.
+_FOLLOW_MARGIN = 1e-6
 # A continued pose that lands within this distance (relative to the
 # geometry's scale, orientation measured as arc length at that scale) of a
 # neighbour's solution is that solution.
@@ -60,43 +66,28 @@ def neighbour_pairs(shape):
     return pairs
 
 
-def _track(mechanism, pose, joints_src, joints_dst, substeps):
-    """Carry poses from joints ``joints_src`` to ``joints_dst`` in equal substeps."""
-    for k in range(1, substeps + 1):
-        joints_from = joints_src + (joints_dst - joints_src) * ((k - 1) / substeps)
-        joints_to = joints_src + (joints_dst - joints_src) * (k / substeps)
-        pose = mechanism.predict(pose, joints_from, joints_to)
-        pose = mechanism.correct(pose, joints_to, _CORRECTOR_STEPS)
-    return pose
-
-
 def _continue_into(field, joints, src, dst):
     """Target slot in ``dst`` of every solution of ``src``, shape (n, max_solutions),
     -1 if none."""
     target = np.full((len(src), field.max_solutions), -1, dtype=np.int8)
     rows, slots = np.nonzero(field.valid[src])
+    if rows.size == 0:
+        return target
     mechanism = field.mechanism
-    # Near a fold the two merging solutions move fast: what one step cannot
-    # follow is tried again in finer substeps before it counts as a break.
-    for substeps in _SUBSTEPS:
-        if rows.size == 0:
-            break
-        # Across a periodic axis' seam the move is one step, not a turn back.
-        joints_dst = field.grid.nearest_joints(joints[src[rows]], joints[dst[rows]])
-        pose = _track(mechanism, field.poses[src[rows], slots], joints[src[rows]], joints_dst,
-                      substeps)
-        dist = mechanism.pose_distance(field.poses[dst[rows]], pose[:, None, :])
-        dist = np.where(np.isnan(dist), np.inf, dist)
-        best = np.argmin(dist, axis=1)
-        landed = dist[np.arange(rows.size), best] < _LAND_TOL * mechanism.scale
-        # The source, the tracked pose and the landing solution must share an
-        # aspect: a step that jumped across a fold lands on the other sign.
-        target_sign = np.sign(field.margin[dst[rows], best])
-        same_aspect = ((np.sign(field.margin[src[rows], slots]) == target_sign)
-                       & (np.sign(mechanism.margin(pose, joints_dst)) == target_sign))
-        ok = landed & same_aspect
-        target[rows[ok], slots[ok]] = best[ok]
-        rows, slots = rows[~ok], slots[~ok]
+    # Across a periodic axis' seam the move is one step, not a turn back.
+    joints_dst = field.grid.nearest_joints(joints[src[rows]], joints[dst[rows]])
+    pose = np.array(field.poses[src[rows], slots], dtype=float)
+    status = follow_segments(mechanism, joints[src[rows]], joints_dst, pose, _FOLLOW_MARGIN)
+    dist = mechanism.pose_distance(field.poses[dst[rows]], pose[:, None, :])
+    dist = np.where(np.isnan(dist), np.inf, dist)
+    best = np.argmin(dist, axis=1)
+    landed = dist[np.arange(rows.size), best] < _LAND_TOL * mechanism.scale
+    # The source and the landing solution must share an aspect: the
+    # continuation stops before a fold, where the margin would change sign.
+    same_aspect = (np.sign(field.margin[src[rows], slots])
+                   == np.sign(field.margin[dst[rows], best]))
+    ok = (status == FOLLOWED) & landed & same_aspect
+    target[rows[ok], slots[ok]] = best[ok]
     return target
 
 
@@ -128,8 +119,8 @@ def match_solutions(field, lower, upper, screen=True):
         todo = np.flatnonzero(~settled)
     else:
         todo = np.arange(len(lower))
-    # A link needs a solution at both ends; the faces left are tracked
-    # together, so the few solutions that need substeps take few calls.
+    # A link needs a solution at both ends; the faces left are followed
+    # together, in one compiled loop.
     todo = todo[(field.count[lower[todo]] > 0) & (field.count[upper[todo]] > 0)]
     # Chunks bound the tracking's temporaries, which scale with faces.
     for start in range(0, todo.size, _CHUNK):
