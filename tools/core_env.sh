@@ -5,7 +5,8 @@
 # version ranges, with the floor versions (ros2_ws/requirements-floor.txt)
 # as constraints, and the test tools.  The ROS wheels exist for Python 3.11
 # only: this is how the core is tested on Python 3.12, a stock Jazzy's.
-# Quick when nothing changed since the last run.
+# Quick when nothing changed since the last run; when only the core's
+# sources did, the core alone is installed again.
 set -euo pipefail
 
 if [ $# -ne 2 ]; then
@@ -36,7 +37,22 @@ fi
 inputs="$("$python" --version 2>&1) $(cat "$0" "$ws"/requirements*.txt \
   "$ws/requirements.py" "$root/src/rpr3_gwr_core/setup.py" | sha256sum | cut -c1-16)"
 stamp="$venv/.rpr3-gwr-core-env"
+sources="$(cd "$root/src/rpr3_gwr_core" && find . -path '*/__pycache__' -prune -o -type f -print |
+  LC_ALL=C sort | xargs sha256sum | sha256sum | cut -c1-16)"
+source_stamp="$venv/.rpr3-gwr-core-sources"
+
+# From a copy: setuptools writes its build and egg-info folders beside
+# setup.py, and the colcon build's stamp covers every file of src/.
+staging="$(mktemp -d)"
+trap 'rm -rf "$staging"' EXIT
+tar -C "$root/src/rpr3_gwr_core" --exclude=__pycache__ -cf - . | tar -C "$staging" -xf -
+
 if [ "$(cat "$stamp" 2>/dev/null)" = "$inputs" ]; then
+  if [ "$(cat "$source_stamp" 2>/dev/null)" != "$sources" ]; then
+    log "installing the core's changed sources into ${venv#"$root"/}"
+    "$venv/bin/python" -m pip install -qq --no-deps --force-reinstall "$staging"
+    echo "$sources" > "$source_stamp"
+  fi
   exit 0
 fi
 log "creating ${venv#"$root"/} with $("$python" --version 2>&1) and the floor versions"
@@ -47,13 +63,9 @@ rm -rf "$venv"
   --floor "$ws/requirements-floor.txt" > "$venv/constraints.txt"
 # pip runs with -qq, as in setup.sh: a machine's pip configuration may name
 # index folders that do not exist.
-# From a copy: setuptools writes its build and egg-info folders beside
-# setup.py, and the colcon build's stamp covers every file of src/.
-staging="$(mktemp -d)"
-trap 'rm -rf "$staging"' EXIT
-tar -C "$root/src/rpr3_gwr_core" --exclude=__pycache__ -cf - . | tar -C "$staging" -xf -
 "$venv/bin/python" -m pip install -qq -c "$venv/constraints.txt" "$staging" pytest hypothesis
 "$venv/bin/python" -m pip list --format=freeze 2>/dev/null |
   grep -iE '^(numpy|scipy|networkx|matplotlib|pyyaml|numba|llvmlite|pytest|hypothesis)==' |
   paste -sd ' ' | sed 's/^/rpr3-gwr core env: installed /' >&2
 echo "$inputs" > "$stamp"
+echo "$sources" > "$source_stamp"
