@@ -29,7 +29,7 @@ published roadmap, which stays latched.
 ``full`` (default false) builds the full roadmap instead, every joint free,
 through the core's roadmap cache (``$RPR3_GWR_CACHE``, else
 ``~/.cache/rpr3-gwr``): for the paper's 3-RPR the core's adaptive grid
-(``FULL_BASE_GRID`` refined ``FULL_REFINEMENT`` times; about 25 s the first
+(``FULL_BASE_GRID`` refined ``FULL_REFINEMENT`` times; about 50 s the first
 time, 2 to 3 s from the cache), for another mechanism its file's whole box.
 It is published on the same topics; the maps and markers, drawn for 2-D
 grids, are not.
