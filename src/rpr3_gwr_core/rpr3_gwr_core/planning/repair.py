@@ -233,9 +233,11 @@ class PathRepairer:
                 break  # the blocked cells cut the patches
             cells, cell_patches = cell_path
             joints, patches, origin = self.waypoints(problem, cells, cell_patches)
-            result, kept = self.simplifier.shortcut(
-                joints, patches, problem, keep,
-                (tried[-1][3], tried[-1][0][tried[-1][2]]) if tried else None)
+            earlier = None
+            if tried:
+                last_joints, _, last_kept, last_result = tried[-1]
+                earlier = last_result, last_joints[last_kept]
+            result, kept = self.simplifier.shortcut(joints, patches, problem, keep, earlier)
             tried.append((joints, patches, kept, result))
             if result.ok:
                 return RepairedPath(result, joints[kept], patches[kept],

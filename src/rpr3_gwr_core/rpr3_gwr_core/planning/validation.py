@@ -251,11 +251,11 @@ def _resumed(mechanism, path, earlier, k, goal_pose, min_margin, max_step, poses
     sign, steps = earlier.aspect, int(earlier.segment_steps[:k].sum())
     low = np.flatnonzero(trace[:k, 0] < min_margin)
     if low.size:
-        trace[low[0] + 1:k] = (np.nan, 0.0)
-        poses[low[0] + 1:] = np.nan
-        return result(False, f"margin {trace[low[0], 0]:.2e} below {min_margin:g} before "
-                      f"waypoint {low[0] + 1}", float(trace[low[0], 0]), sign,
-                      int(trace[:low[0] + 1, 1].sum()), int(low[0]) + 1)
+        first = int(low[0])
+        trace[first + 1:k] = (np.nan, 0.0)
+        poses[first + 1:] = np.nan
+        return _verdict(mechanism, TOO_CLOSE, first + 1, int(trace[:first + 1, 1].sum()),
+                        float(trace[first, 0]), sign, None, goal_pose, min_margin, result)
     followed = poses[k].copy()
     status, stopped, more, smallest = follow_path(mechanism, path[k:], followed, min_margin,
                                                   max_step, poses[k:], trace[k:])
