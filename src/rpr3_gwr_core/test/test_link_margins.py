@@ -21,12 +21,12 @@ from rpr3_gwr_core.workspace.roadmap import build_roadmap
 
 CONFIG = pathlib.Path(__file__).resolve().parents[3] / "config"
 
-# Pairs whose least-cost ways, on the cell centres' margins alone, crossed a
+# Pairs whose least-cost ways, on the cell centres' margins alone, cross a
 # link over which the sheet folds (the first pair: the platform cannot
-# follow it from one cell centre to the other, and the roadmap's continuity,
-# which follows it as the validator does, no longer links it) or dips to a
-# fifth of its ends' margins (the second: linked, and its nodes lowered), so
-# that the motion checker refused both cell paths.
+# follow it from one cell centre to the other, so the roadmap's continuity,
+# which follows it as the validator does, makes no such link) or dips to a
+# fifth of its ends' margins (the second: linked, its nodes lowered), where
+# the motion checker refuses the cell path.
 FOLDED_WAYS = [
     ((14.15332319230562, 16.067184360952666, 29.740855993582887, -0.19308822856563745),
      (14.185606064006135, 10.26581888665126, 12.731883348227026, 1.6273097014865279),
