@@ -14,7 +14,9 @@ import contextvars
 import time
 
 from rclpy.exceptions import InvalidHandle
-from rclpy.executors import MultiThreadedExecutor, await_or_execute
+from rclpy.executors import await_or_execute
+
+from .executors import BoundedExecutor
 
 __all__ = ["ReceiptExecutor", "request_age"]
 
@@ -31,9 +33,9 @@ def request_age():
     return max(0.0, (time.time_ns() - received) * 1e-9)
 
 
-class ReceiptExecutor(MultiThreadedExecutor):
-    """A MultiThreadedExecutor whose service callbacks know, through
-    :func:`request_age`, when their request was received."""
+class ReceiptExecutor(BoundedExecutor):
+    """A :class:`~.executors.BoundedExecutor` whose service callbacks know,
+    through :func:`request_age`, when their request was received."""
 
     def _take_service(self, srv):
         try:

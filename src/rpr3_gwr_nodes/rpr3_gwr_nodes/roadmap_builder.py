@@ -40,7 +40,6 @@ import time
 
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
-from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rpr3_gwr_core.exceptions import GWRError, InvalidInputError
@@ -57,6 +56,7 @@ from visualization_msgs.msg import MarkerArray
 
 from .conversions import roadmap_to_msgs
 from .core_threads import core_threads
+from .executors import BoundedExecutor
 from .mechanism_parameters import declare_mechanism, home_source
 from .memory import release_free_memory, use_one_arena
 from .profiles import BASE_FRAME, LATCHED_QOS
@@ -292,4 +292,4 @@ class RoadmapBuilder(Node):
 def main(args=None):
     # So that release_free_memory reaches the memory of every thread.
     use_one_arena()
-    return run(RoadmapBuilder, MultiThreadedExecutor, args, usage=USAGE)
+    return run(RoadmapBuilder, BoundedExecutor, args, usage=USAGE)

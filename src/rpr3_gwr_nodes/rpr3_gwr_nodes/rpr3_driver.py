@@ -83,7 +83,6 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
-from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rpr3_gwr_core.exceptions import GWRError, InvalidInputError
@@ -104,6 +103,7 @@ from visualization_msgs.msg import MarkerArray
 
 from .conversions import (configuration_from_msg, duration_msg, is_empty_scene, pose_msg,
                           scene_from_msg, scene_msg_from_bytes, scene_to_msg)
+from .executors import BoundedExecutor
 from .frames import frame_transforms
 from .goal_checks import (CONTROLLER_CODES, check_follow_trajectory, check_trajectory,
                           start_problem, trajectory_fields, whole_turns)
@@ -758,4 +758,4 @@ class Rpr3Driver(Node):
 
 
 def main(args=None):
-    return run(Rpr3Driver, MultiThreadedExecutor, args, usage=USAGE, num_threads=4)
+    return run(Rpr3Driver, BoundedExecutor, args, usage=USAGE, num_threads=4)
