@@ -22,7 +22,9 @@ from .field import NSolutionField, compute_field
 from .grid import Axis, Grid
 from .roadmap import Roadmap, aspect_groups, build_roadmap, roadmap_graph
 from .segmentation import Gate, Patch, Segmentation, segment
+from .thin_regions import ThinRefinement, refine_thin_regions, thin_patches
 
 __all__ = ["Axis", "Grid", "AdaptiveGrid", "refine", "grid_from_dict", "NSolutionField",
            "compute_field", "Gate", "Patch", "Segmentation", "segment", "Roadmap",
-           "aspect_groups", "build_roadmap", "roadmap_graph"]
+           "aspect_groups", "build_roadmap", "roadmap_graph", "ThinRefinement",
+           "refine_thin_regions", "thin_patches"]
