@@ -299,3 +299,40 @@ def test_the_docs_own_robot_script_changes_the_assembly_mode_it_finds(ros_contex
 
 def _own(mode):
     return Configuration(joint_names=TH_NAMES, positions=list(OWN_JOINTS), mode=mode)
+
+
+# Two solutions of th = (1.5, 165 deg, -87 deg) in one aspect, joined along
+# a strip that narrows below the default grid's cell.
+THIN_TH = (1.5, math.radians(165.0), math.radians(-87.0))
+THIN_MODES = (math.radians(-122.510593), math.radians(-33.654195))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("thin_refinement, connected", [(4, True), (0, False)])
+def test_the_builder_refines_a_slice_s_thin_regions_unless_told_not_to(ros_context,
+                                                                     thin_refinement,
+                                                                     connected):
+    parameters = [Parameter("fixed_value", value=THIN_TH[0]),
+                  Parameter("thin_refinement", value=thin_refinement)]
+    suite = Suite(ros_context, THREE_RRR, "thin_rrr", builder_parameters=parameters)
+    try:
+        assert (suite.builder.roadmap.grid.size > 120 * 120) == connected
+        ends = [Configuration(joint_names=TH_NAMES, positions=list(THIN_TH), mode=mode)
+                for mode in THIN_MODES]
+        response = suite.plan(*ends)
+        if connected:
+            assert response.success, response.error_msg
+            assert response.feasibility == PlanPath.Response.FEASIBILITY_CONNECTED
+            # The reference's det Jx keeps its sign along the planned joints.
+            joints = np.array([p.positions for p in response.trajectory.points])
+            poses = np.array([p.values for p in response.poses])
+            followed, _ = REFERENCE.follow(poses[0], joints, steps=8)
+            sign = np.sign(REFERENCE.margin(poses[0], joints[0]))
+            assert all(np.sign(REFERENCE.margin(pose, at)) == sign for at, pose, _ in followed)
+        else:
+            assert response.error_code == PlanPath.Response.ERROR_INFEASIBLE, response.error_msg
+            assert response.feasibility == PlanPath.Response.FEASIBILITY_UNREACHABLE
+        refused = suite.builder.set_parameters([Parameter("thin_refinement", value=1)])[0]
+        assert not refused.successful and "thin_refinement" in refused.reason
+    finally:
+        suite.close()

@@ -33,12 +33,19 @@ through the core's roadmap cache (``$RPR3_GWR_CACHE``, else
 time, 2 to 3 s from the cache), for another mechanism its file's whole box.
 It is published on the same topics; the maps and markers, drawn for 2-D
 grids, are not.
+
+A slice's thin regions, strips a few cells wide where the singularity-free
+set may go on narrower than a cell, are refined round after round
+(:func:`rpr3_gwr_core.workspace.refine_thin_regions`) at ``thin_refinement``
+fine points a cell (default 4; 0 builds on the grid alone).  A slice without
+thin regions is built once, the same roadmap; a refined one is published on
+its adaptive grid, without the maps and markers of a 2-D grid.
 """
 
 import math
 import time
 
-from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rcl_interfaces.msg import IntegerRange, ParameterDescriptor, SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -46,8 +53,9 @@ from rpr3_gwr_core.exceptions import GWRError, InvalidInputError
 from rpr3_gwr_core.io.cache import cached_roadmap
 from rpr3_gwr_core.io.mechanism_file import roadmap_grid
 from rpr3_gwr_core.paper import FULL_BASE_GRID, FULL_REFINEMENT, PAPER_GEOMETRY
-from rpr3_gwr_core.workspace import build_roadmap
+from rpr3_gwr_core.workspace import build_roadmap, refine_thin_regions
 from rpr3_gwr_core.workspace.grid import Axis, Grid, check_roadmap_grid
+from rpr3_gwr_core.workspace.thin_regions import DEFAULT_THIN_REFINEMENT
 from nav_msgs.msg import OccupancyGrid
 from rpr3_gwr_msgs.msg import NSolutionField, WorkspaceRoadmap
 from std_msgs.msg import Header
@@ -78,11 +86,12 @@ Publishes   field (rpr3_gwr_msgs/msg/NSolutionField), roadmap
 Parameters  mechanism_file ('' for the paper's 3-RPR, read-only),
             fixed_value (the first joint's value on the slice), ranges
             ([min, max] of each free joint, [] for the file's box), step (0
-            for the file's), full (false; true: every joint free, cached)
+            for the file's), full (false; true: every joint free, cached),
+            thin_refinement (4: fine points a cell around thin regions, 0 off)
 Example     ros2 run rpr3_gwr_nodes roadmap_builder --ros-args -p fixed_value:=13.0
 """
 
-_GRID_PARAMETERS = ("fixed_value", "ranges", "step", "full")
+_GRID_PARAMETERS = ("fixed_value", "ranges", "step", "full", "thin_refinement")
 # Within a stage of a build, the log says where it stands this often [s].
 _PROGRESS_PERIOD = 2.0
 # The paper's slice: rho1 = 17.
@@ -118,6 +127,11 @@ class RoadmapBuilder(Node):
             description="Build the full roadmap (every joint free, cached: the paper's 3-RPR "
                         "on the core's adaptive grid, another mechanism on its file's box) "
                         "instead of the slice"))
+        self.declare_parameter("thin_refinement", DEFAULT_THIN_REFINEMENT, ParameterDescriptor(
+            description="Fine points per cell where a slice's thin regions (strips a few "
+                        "cells wide that may go on narrower than a cell) are refined, round "
+                        "after round; 0 builds on the grid alone, 1 is refused",
+            integer_range=[IntegerRange(from_value=0, to_value=16, step=1)]))
         self.field_pub = self.create_publisher(NSolutionField, "field", LATCHED_QOS)
         self.roadmap_pub = self.create_publisher(WorkspaceRoadmap, "roadmap", LATCHED_QOS)
         self.map_pubs = [self.create_publisher(OccupancyGrid, topic, LATCHED_QOS)
@@ -181,6 +195,9 @@ class RoadmapBuilder(Node):
         if not overrides:
             return SetParametersResult(successful=True)
         values = self._values(overrides)
+        if values["thin_refinement"] == 1:
+            return SetParametersResult(successful=False, reason="thin_refinement is 0 (off) or "
+                                                                "at least 2 fine points a cell")
         if values["full"]:
             # Whether a file's whole box fits is known once its base grid is
             # solved, too long for this callback: the build says so and keeps
@@ -243,6 +260,16 @@ class RoadmapBuilder(Node):
                 if values["full"]:
                     roadmap, _ = cached_roadmap(self.mechanism, grid, progress=progress,
                                                 refinement=refinement, workers=pool.map)
+                elif values["thin_refinement"]:
+                    roadmap, report = refine_thin_regions(
+                        self.mechanism, grid, values["thin_refinement"], progress=progress,
+                        workers=pool.map)
+                    if report.rounds:
+                        self.get_logger().info(
+                            f"refined {report.refined_blocks} blocks around thin regions in "
+                            f"{report.rounds} rounds ({report.stopped}"
+                            f"{'; still thin: patches ' if report.thin_left else ''}"
+                            f"{', '.join(map(str, report.thin_left))})")
                 else:
                     roadmap = build_roadmap(self.mechanism, grid, progress=progress,
                                             workers=pool.map)

@@ -15,6 +15,7 @@ from geometry_msgs.msg import Point, Pose, TransformStamped
 from nav_msgs.msg import MapMetaData, OccupancyGrid
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
+from rpr3_gwr_core.workspace import Grid
 from rpr3_gwr_core.world.bodies import mechanism_bodies
 
 from .profiles import BASE_FRAME
@@ -203,8 +204,10 @@ def _size(base):
 
 
 def _plane_axes(roadmap):
+    """The axes of a uniform 2-D grid, whose cells an occupancy grid's are;
+    None for other grids (an adaptive one has cells of several sizes)."""
     grid = roadmap.grid
-    if grid.ndim != 2:
+    if grid.ndim != 2 or not isinstance(grid, Grid):
         return None
     return grid.axes
 
@@ -213,7 +216,7 @@ def field_maps(roadmap, stamp):
     """The n-solution field of a 2-D roadmap as two occupancy grids in
     ``joint_space``, one cell per grid cell: solution counts (value
     ``100 * count / max_solutions``) and regions (``100 * region /
-    n_regions``, 0 for none); None for other grids.
+    n_regions``, 0 for none); None for other grids (3-D, adaptive).
 
     Returns
     -------

@@ -93,7 +93,7 @@ import numpy as np
 from ..exceptions import InvalidInputError
 from ..planning.index import INDEX_TYPES, CellSearchIndex
 from ..planning.planner import build_cell_search_index
-from ..workspace import build_roadmap, refine
+from ..workspace import build_roadmap, refine, refine_thin_regions
 from ..workspace.progress import part
 from ..workspace.segmentation import TABLE_TYPES
 from .export import FIELD_TYPES, FORMAT, VERSION, roadmap_arrays, roadmap_from_arrays
@@ -153,18 +153,21 @@ def default_max_bytes():
     return value
 
 
-def cache_key(mechanism, grid, method="components", min_region_cells=8, refinement=None):
+def cache_key(mechanism, grid, method="components", min_region_cells=8, refinement=None,
+              thin_refinement=None):
     """Hex digest identifying a roadmap build."""
-    text = json.dumps({"format": FORMAT, "version": VERSION, "revision": ALGORITHM_REVISION,
-                       "layout": ENTRY_LAYOUT, "mechanism": mechanism.to_dict(),
-                       "grid": grid.to_dict(), "method": method,
-                       "min_region_cells": min_region_cells, "refinement": refinement},
-                      sort_keys=True)
+    build = {"format": FORMAT, "version": VERSION, "revision": ALGORITHM_REVISION,
+             "layout": ENTRY_LAYOUT, "mechanism": mechanism.to_dict(), "grid": grid.to_dict(),
+             "method": method, "min_region_cells": min_region_cells, "refinement": refinement}
+    # Named only when asked for, so that the keys of other builds stay.
+    if thin_refinement is not None:
+        build["thin_refinement"] = thin_refinement
+    text = json.dumps(build, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
 def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=None,
-                   max_bytes=None, *, workers=map):
+                   max_bytes=None, *, workers=map, thin_refinement=None):
     """Load a roadmap from the cache, or build and store it.
 
     Parameters
@@ -191,6 +194,11 @@ def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=No
         (:func:`~rpr3_gwr_core.workspace.build_roadmap`), in parallel with a
         thread pool's (CRC-32 and numpy release the interpreter's lock).
         The default, the builtin ``map``, works in the calling thread.
+    thin_refinement : int, optional
+        Build with :func:`~rpr3_gwr_core.workspace.refine_thin_regions` at
+        this refinement (on the refined grid when ``refinement`` is given,
+        at its refinement): the roadmap's grid is then ``grid`` itself or
+        ``grid`` with the blocks around its thin regions refined.
 
     Returns
     -------
@@ -211,12 +219,13 @@ def cached_roadmap(mechanism, grid, cache_dir=None, progress=None, refinement=No
         stored (it is returned all the same).
     """
     roadmap, _, hit = cached_planning(mechanism, grid, cache_dir, progress, refinement,
-                                      max_bytes, workers=workers)
+                                      max_bytes, workers=workers,
+                                      thin_refinement=thin_refinement)
     return roadmap, hit
 
 
 def cached_planning(mechanism, grid, cache_dir=None, progress=None, refinement=None,
-                    max_bytes=None, *, workers=map):
+                    max_bytes=None, *, workers=map, thin_refinement=None):
     """:func:`cached_roadmap` with the roadmap's planning index
     (:func:`~rpr3_gwr_core.planning.search_index`), built with it and
     stored in its entry: a :class:`~rpr3_gwr_core.planning.Planner` given
@@ -235,11 +244,11 @@ def cached_planning(mechanism, grid, cache_dir=None, progress=None, refinement=N
             or max_bytes < 0:
         raise InvalidInputError(f"max_bytes must be a non-negative integer, got {max_bytes!r}")
     directory = cache_dir or default_cache_dir()
-    key = cache_key(mechanism, grid, refinement=refinement)
+    key = cache_key(mechanism, grid, refinement=refinement, thin_refinement=thin_refinement)
     path = os.path.join(directory, key)
     if os.path.isdir(path):
         try:
-            roadmap, index = _load(path, (mechanism, grid, refinement), workers)
+            roadmap, index = _load(path, (mechanism, grid, refinement, thin_refinement), workers)
         except (InvalidInputError, OSError, ValueError) as exc:
             # Unless another process evicted it meanwhile: that is a plain miss.
             if os.path.isdir(path):
@@ -260,8 +269,12 @@ def cached_planning(mechanism, grid, cache_dir=None, progress=None, refinement=N
         grid = refine(mechanism, grid, refinement, progress=part(progress, 0.0, built),
                       workers=workers)
     refined = time.perf_counter() - begin
-    roadmap = build_roadmap(mechanism, grid, progress=part(progress, built, 0.7),
-                            workers=workers)
+    if thin_refinement is None:
+        roadmap = build_roadmap(mechanism, grid, progress=part(progress, built, 0.7),
+                                workers=workers)
+    else:
+        roadmap, _ = refine_thin_regions(mechanism, grid, thin_refinement,
+                                         progress=part(progress, built, 0.7), workers=workers)
     if refinement is not None:
         roadmap.timings["refine"] = refined
     report = part(progress)
@@ -312,7 +325,7 @@ def find_cached_planning(mechanism, grid, cache_dir=None, *, workers=map):
     if not os.path.isdir(path):
         return None
     try:
-        roadmap, index = _load(path, (mechanism, base, refinement), workers)
+        roadmap, index = _load(path, (mechanism, base, refinement, None), workers)
     except (InvalidInputError, OSError, ValueError):
         return None
     return (roadmap, index) if roadmap.grid == grid else None
@@ -404,7 +417,7 @@ def _save(folder, roadmap, index):
 
 def _load(folder, expected=None, workers=map):
     """The roadmap and planning index of an entry (module doc), which must
-    be of ``expected = (mechanism, grid, refinement)`` when given; raises
+    be of ``expected = (mechanism, grid, refinement, thin_refinement)`` when given; raises
     InvalidInputError naming what failed, or OSError."""
     with open(os.path.join(folder, "header.json"), encoding="utf-8") as stream:
         try:
@@ -502,17 +515,21 @@ def _check_header(header, expected):
             raise InvalidInputError(f"header.json lists {name} wrongly")
 
 
-def _check_names(header, mechanism, grid, refinement):
-    """That an entry's header names the mechanism and grid asked for."""
+def _check_names(header, mechanism, grid, refinement, thin_refinement):
+    """That an entry's header names the mechanism and grid asked for: the
+    grid, or it refined (by :func:`refine`, or around its thin regions)."""
     if _checksum(header["mechanism"]) != _checksum(mechanism.to_dict()):
         raise InvalidInputError("header.json names another mechanism")
     stored = header["grid"]
+    refined = (isinstance(stored, dict) and stored.get("kind") == "adaptive"
+               and stored.get("refinement") == (thin_refinement if refinement is None
+                                                else refinement)
+               and _checksum(stored.get("base")) == _checksum(grid.to_dict()))
     if refinement is None:
-        same = _checksum(stored) == _checksum(grid.to_dict())
+        same = (_checksum(stored) == _checksum(grid.to_dict())
+                or (thin_refinement is not None and refined))
     else:
-        same = (isinstance(stored, dict) and stored.get("kind") == "adaptive"
-                and stored.get("refinement") == refinement
-                and _checksum(stored.get("base")) == _checksum(grid.to_dict()))
+        same = refined
     if not same:
         raise InvalidInputError("header.json names another grid")
 

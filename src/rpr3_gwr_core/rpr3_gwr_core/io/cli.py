@@ -102,6 +102,17 @@ def _duration(text):
     return value
 
 
+def _count(text):
+    """A non-negative integer."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r} is negative")
+    return value
+
+
 def _fixed_joint(text):
     """``NAME=VALUE`` of ``--fix``."""
     name, equals, value = text.partition("=")
@@ -131,6 +142,11 @@ def _mechanism_options(command):
                          metavar="NAME=VALUE",
                          help="with --mechanism: a joint held fixed (repeatable) [length "
                               "unit, deg for an angle]; the others are the roadmap's axes")
+    command.add_argument("--thin-refinement", type=_count, metavar="N",
+                         help="with --mechanism: fine points per cell where the roadmap "
+                              "refines its thin regions, strips a few cells wide that may go "
+                              "on narrower than a cell (default 4); 0 leaves the grid as it "
+                              "is")
 
 
 def _figure(path):

@@ -193,7 +193,9 @@ def _cusps(args, progress, workers):
         if type(mechanism).refine_cusp is Mechanism.refine_cusp:
             raise InvalidInputError(f"the {mechanism.kind} has no cusp equations: 'cusps' "
                                     "takes mechanisms that have them (the 3-RPR)")
-    roadmap, _ = cached_roadmap(mechanism, grid, args.cache_dir, progress, workers=workers)
+    thin = None if args.mechanism is None else _thin_refinement(args, grid)
+    roadmap, _ = cached_roadmap(mechanism, grid, args.cache_dir, progress, workers=workers,
+                                thin_refinement=thin)
     try:
         cusps = find_cusps(roadmap)
     except NotImplementedError as exc:
@@ -207,8 +209,9 @@ def _dk(args, progress, workers):
 
         mechanism = load_mechanism_file(args.mechanism).mechanism
     else:
-        if args.fix:
-            raise InvalidInputError("--fix needs --mechanism")
+        if args.fix or args.thin_refinement is not None:
+            raise InvalidInputError(f"{'--fix' if args.fix else '--thin-refinement'} needs "
+                                    "--mechanism")
         mechanism = PAPER_GEOMETRY
     names = mechanism.joint_names
     joint_angles, pose_angles = _angles(mechanism)
@@ -321,7 +324,8 @@ def _located_modes(args, mechanism, progress, workers):
             raise InvalidInputError("--full covers every joint: give it or --fix")
         described, grid = _file_roadmap(args, progress, workers)
         roadmap, index, _ = cached_planning(mechanism, grid, args.cache_dir, progress,
-                                            workers=workers)
+                                            workers=workers,
+                                            thin_refinement=_thin_refinement(args, grid))
         where = ["--mechanism", args.mechanism,
                  *(f"--fix {name}={value:g}" for name, value in args.fix)]
     start_mode = None
@@ -374,7 +378,8 @@ def _roadmap(args, progress, workers):
 
         described, grid = _file_roadmap(args, progress, workers)
         roadmap, hit = cached_roadmap(described.mechanism, grid, args.cache_dir, progress,
-                                      workers=workers)
+                                      workers=workers,
+                                      thin_refinement=_thin_refinement(args, grid))
         if args.slice_figure:
             raise InvalidInputError("--slice-figure needs --full")
     elif args.full:
@@ -453,12 +458,37 @@ def _paper_slice_options(args, names):
             raise InvalidInputError(f"{', '.join(given) or '--full'}: the paper's 3-RPR; with "
                                     "--mechanism the grid is the file's box and --fix")
         return
-    if args.fix:
-        raise InvalidInputError("--fix needs --mechanism")
+    if args.fix or args.thin_refinement is not None:
+        raise InvalidInputError(f"{'--fix' if args.fix else '--thin-refinement'} needs "
+                                "--mechanism")
     defaults = {"rho1": 17.0, "rho2": (0.0, 50.0), "rho3": (0.0, 50.0), "step": 0.125}
     for name in names:
         if getattr(args, name) is None:
             setattr(args, name, defaults[name])
+
+
+def _thin_refinement(args, grid):
+    """``--thin-refinement`` for a build on ``grid``: None (no thin regions
+    refined) when 0, or when the grid is not uniform (the file's box over
+    more cells than a uniform grid may have: refined by rule already)."""
+    from ..workspace import Grid
+    from ..workspace.thin_regions import DEFAULT_THIN_REFINEMENT
+
+    if args.thin_refinement == 1:
+        raise InvalidInputError("--thin-refinement is 0 (off) or at least 2 fine points a "
+                                "cell, got 1")
+    if args.thin_refinement == 0 or not isinstance(grid, Grid):
+        return None
+    return DEFAULT_THIN_REFINEMENT if args.thin_refinement is None else args.thin_refinement
+
+
+def _plan_thin_refinement(path, plan):
+    """The thin refinement a plan file's roadmap was built with."""
+    thin = plan["roadmap"].get("thin_refinement")
+    if thin is not None and (type(thin) is not int or thin < 2):
+        raise InvalidInputError(f"{path}: its roadmap's thin_refinement is an integer >= 2 "
+                                f"or null, got {thin!r:.40}")
+    return thin
 
 
 def _file_roadmap(args, progress, workers, free_joints=None, purpose=None):
@@ -556,9 +586,11 @@ def _plan_on_file(args, progress, workers):
     if tolerance is not None and _request_angles(mechanism)[-1]:
         tolerance = math.radians(tolerance)
     options = _options(args, mechanism, tolerance)
+    thin = _thin_refinement(args, grid)
     roadmap, index, _ = cached_planning(mechanism, grid, args.cache_dir, progress,
-                                        workers=workers)
-    roadmap_doc = {"mechanism": mechanism.to_dict(), "grid": grid.to_dict()}
+                                        workers=workers, thin_refinement=thin)
+    roadmap_doc = {"mechanism": mechanism.to_dict(), "grid": grid.to_dict(),
+                   "thin_refinement": thin}
     start, goal = (pose or joints for pose, joints in zip(poses, (args.start, args.goal)))
     return _answer(args, progress, roadmap, index, start, goal, options, roadmap_doc)
 
@@ -760,8 +792,9 @@ def _plot(args, progress, workers):
         roadmap, index, _ = _full_roadmap(args.cache_dir, progress, workers)
     else:
         check_roadmap_grid(mechanism, grid)
-        roadmap, index, _ = cached_planning(mechanism, grid, args.cache_dir, progress,
-                                            workers=workers)
+        roadmap, index, _ = cached_planning(
+            mechanism, grid, args.cache_dir, progress, workers=workers,
+            thin_refinement=_plan_thin_refinement(args.plan_file, plan))
     world = None
     if in_scene is not None:
         from ..planning import Planner

@@ -156,9 +156,10 @@ def refine_thin_regions(mechanism, grid, refinement=DEFAULT_THIN_REFINEMENT,
         if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least:
             raise InvalidInputError(f"{name} must be an integer >= {least}, got {value!r}")
     # The first build is most of the work when nothing is thin; round k
-    # takes the k-th half of what is left.
+    # starts halfway through what the rounds before it left.
     roadmap = build_roadmap(mechanism, grid, progress=part(progress, 0.0, 0.9),
                             workers=workers, **build_options)
+    report = part(progress)
     rounds = 0
     while True:
         thin = thin_patches(roadmap)
@@ -177,12 +178,10 @@ def refine_thin_regions(mechanism, grid, refinement=DEFAULT_THIN_REFINEMENT,
             break
         blocks |= wanted
         rounds += 1
-        left = 0.1 * 0.5 ** (rounds - 1)
-        roadmap = build_roadmap(mechanism, refined, workers=workers,
-                                progress=part(progress, 1.0 - left, 1.0 - left / 2,
-                                              f"thin regions, round {rounds}"),
-                                **build_options)
-    part(progress)("done", 1.0)
+        # One report a round: its build's own stages are the first's again.
+        report(f"thin regions, round {rounds}", 1.0 - 0.1 * 0.5 ** (rounds - 1))
+        roadmap = build_roadmap(mechanism, refined, workers=workers, **build_options)
+    report("done", 1.0)
     return roadmap, ThinRefinement(rounds, len(blocks), tuple(thin), stopped)
 
 
