@@ -110,7 +110,8 @@ def test_rounds_and_cells_bound_the_refinement():
 
 
 @pytest.mark.parametrize("options", [{"refinement": 1}, {"reach": 0}, {"max_rounds": -1},
-                                     {"refinement": 2.0}, {"reach": True}])
+                                     {"refinement": 2.0}, {"reach": True}, {"max_cells": 0},
+                                     {"max_cells": 10**9}])
 def test_malformed_options_are_refused(options):
     mechanism, grid = _slice("three_rrr.yaml", {"th1": 0.0})
     with pytest.raises(InvalidInputError):

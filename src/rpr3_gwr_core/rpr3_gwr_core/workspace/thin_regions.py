@@ -38,7 +38,7 @@ DEFAULT_THIN_REFINEMENT = 4
 # Base blocks refined around each cell of a thin region, along every axis:
 # two reach past the cell that a sub-cell strip leaves from.
 DEFAULT_THIN_REACH = 2
-# Most rebuilds: the 3-RRR's way at th1 = 1.5 rad settles in 8.
+# Most rebuilds: the 3-RRR's way at th1 = 1.5 rad settles in 7.
 DEFAULT_THIN_ROUNDS = 24
 # Share of a patch's cells on its border from which it is thin.
 _THIN_BORDER_SHARE = 0.5
@@ -155,6 +155,10 @@ def refine_thin_regions(mechanism, grid, refinement=DEFAULT_THIN_REFINEMENT,
                                ("max_rounds", max_rounds, 0)):
         if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least:
             raise InvalidInputError(f"{name} must be an integer >= {least}, got {value!r}")
+    if (isinstance(max_cells, bool) or not isinstance(max_cells, numbers.Integral)
+            or not 0 < max_cells <= MAX_GRID_CELLS):
+        raise InvalidInputError(f"max_cells is an integer in [1, {MAX_GRID_CELLS}], got "
+                                f"{max_cells!r}")
     # The first build is most of the work when nothing is thin; round k
     # starts halfway through what the rounds before it left.
     roadmap = build_roadmap(mechanism, grid, progress=part(progress, 0.0, 0.9),
