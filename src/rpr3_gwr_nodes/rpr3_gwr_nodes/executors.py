@@ -5,9 +5,8 @@ thread pool at once, and yields a task the pool has queued but not started
 again on each turn of its loop (ros2/rclpy#1452, fixed upstream by #1469,
 backported to Jazzy in 7.1.9): while all the threads are busy, the spinning
 thread loops without waiting and holds the interpreter's lock most of the
-time, so the callbacks it is waiting for run many times slower.  A builder
-and a planner on one thread took 45 s to publish and load the paper's
-roadmap instead of 1 s.  A :class:`BoundedExecutor` waits for a free thread
+time, so the callbacks it is waiting for run many times slower.  A
+:class:`BoundedExecutor` waits for a free thread
 before it looks for work, so the callbacks that cannot start yet wait where
 they arrived (a request in its service's reader, its reception time kept)
 and the spinning thread sleeps meanwhile.  With a fixed rclpy it changes
