@@ -209,9 +209,7 @@ def _dk(args, progress, workers):
 
         mechanism = load_mechanism_file(args.mechanism).mechanism
     else:
-        if args.fix or args.thin_refinement is not None:
-            raise InvalidInputError(f"{'--fix' if args.fix else '--thin-refinement'} needs "
-                                    "--mechanism")
+        _refuse_file_options(args)
         mechanism = PAPER_GEOMETRY
     names = mechanism.joint_names
     joint_angles, pose_angles = _angles(mechanism)
@@ -458,13 +456,19 @@ def _paper_slice_options(args, names):
             raise InvalidInputError(f"{', '.join(given) or '--full'}: the paper's 3-RPR; with "
                                     "--mechanism the grid is the file's box and --fix")
         return
-    if args.fix or args.thin_refinement is not None:
-        raise InvalidInputError(f"{'--fix' if args.fix else '--thin-refinement'} needs "
-                                "--mechanism")
+    _refuse_file_options(args)
     defaults = {"rho1": 17.0, "rho2": (0.0, 50.0), "rho3": (0.0, 50.0), "step": 0.125}
     for name in names:
         if getattr(args, name) is None:
             setattr(args, name, defaults[name])
+
+
+def _refuse_file_options(args):
+    """``--fix`` and ``--thin-refinement`` are a mechanism file's."""
+    given = "--fix" if args.fix else "--thin-refinement" if args.thin_refinement is not None \
+        else None
+    if given:
+        raise InvalidInputError(f"{given} needs --mechanism")
 
 
 def _thin_refinement(args, grid):

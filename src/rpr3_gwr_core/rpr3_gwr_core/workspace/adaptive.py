@@ -62,8 +62,8 @@ from .grid import (MAX_GRID_CELLS, Axis, Grid, GridBase, box_points, lattice_box
                    within_box)
 from .progress import part
 
-__all__ = ["AdaptiveGrid", "refine", "grid_from_dict", "coarse_base", "DEFAULT_REFINEMENT",
-           "DEFAULT_REFINE_MARGIN"]
+__all__ = ["AdaptiveGrid", "refine", "grid_from_dict", "coarse_base", "block_shape",
+           "DEFAULT_REFINEMENT", "DEFAULT_REFINE_MARGIN"]
 
 DEFAULT_REFINEMENT = 4
 DEFAULT_REFINE_MARGIN = 0.02
@@ -118,7 +118,7 @@ class AdaptiveGrid(GridBase):
         self.base = base
         self.refinement = int(refinement)
         self._periodic = np.array([a.periodic for a in base.axes])
-        self.block_shape = _block_shape(base)
+        self.block_shape = block_shape(base)
         blocks = np.unique(np.asarray(blocks, dtype=np.int64).ravel())
         if blocks.size and (blocks[0] < 0 or blocks[-1] >= math.prod(self.block_shape)):
             raise InvalidInputError("refined block index outside the base grid")
@@ -456,7 +456,7 @@ def _axis_pairs(index, rank, stride, length, refinement, periodic):
     return lower, upper[lower], gap[lower]
 
 
-def _block_shape(base):
+def block_shape(base):
     """Blocks along each axis of a base grid: one fewer than its points, as
     many along a periodic axis (module doc)."""
     return tuple(n if a.periodic else n - 1 for n, a in zip(base.shape, base.axes))
@@ -604,7 +604,7 @@ def refine(mechanism, base, refinement=DEFAULT_REFINEMENT, min_margin=DEFAULT_RE
     field = compute_field(mechanism, base, progress=part(report, 0.0, 0.6, "base grid"),
                           workers=workers)
     shape = base.shape
-    blocks = _block_shape(base)
+    blocks = block_shape(base)
     periodic = np.array([a.periodic for a in base.axes])
     count = field.count.reshape(shape).astype(np.int16)
     weakest = np.min(np.where(field.valid, np.abs(field.margin), np.inf), axis=1).reshape(shape)

@@ -3,11 +3,12 @@
 A region of the singularity-free set narrower than a cell shows on a grid as
 a strip one to three cells wide that ends where it narrows below a cell; a
 way along it, between regions that the grid keeps apart, is missed.  A thin
-region is a patch without a gate (a region of one patch) most of whose cells
-lie on its border: they have fewer than ``2 * ndim`` face-neighbours in the
-patch.  Large regions with no gate (the five-bar's working modes, each a
-whole torus but a band) are not thin, and a region that is not thin is left
-as the grid has it.
+region is a patch without a gate (a region of one patch) at least half of
+whose base blocks (those its cells lie in) are on its border: a face of the
+block leads to a block it does not reach.  Measured in base blocks, a strip
+is as thin after a round of refinement as before.  Large regions with no
+gate (the five-bar's working modes, each a whole torus but a band) are not
+thin, and a region that is not thin is left as the grid has it.
 
 :func:`refine_thin_regions` builds the roadmap, refines the base grid's
 blocks within ``reach`` blocks of every cell of a thin region, and builds
@@ -24,7 +25,7 @@ import numbers
 import numpy as np
 
 from ..exceptions import GridSizeError, InvalidInputError
-from .adaptive import AdaptiveGrid
+from .adaptive import AdaptiveGrid, block_shape
 from .grid import MAX_GRID_CELLS, Grid
 from .progress import part
 from .roadmap import build_roadmap
@@ -40,7 +41,7 @@ DEFAULT_THIN_REFINEMENT = 4
 DEFAULT_THIN_REACH = 2
 # Most rebuilds: the 3-RRR's way at th1 = 1.5 rad settles in 7.
 DEFAULT_THIN_ROUNDS = 24
-# Share of a patch's cells on its border from which it is thin.
+# Share of a patch's base blocks on its border from which it is thin.
 _THIN_BORDER_SHARE = 0.5
 
 
@@ -197,14 +198,12 @@ def _base_blocks(grid, base, cells):
     """The base block of each cell, shape (n, ndim), with the block array's
     shape and which axes are periodic."""
     periodic = np.array([axis.periodic for axis in base.axes])
-    counts = np.array([axis.count for axis in base.axes])
-    # A periodic axis has a block after its last point (one turn on).
-    shape = tuple(np.where(periodic, counts, counts - 1).tolist())
+    shape = block_shape(base)
     low = np.array([axis.low for axis in base.axes])
     step = np.array([axis.step for axis in base.axes])
     # The small shift keeps a point on a base point in the block it starts;
     # the last point of a bounded axis is in the block it ends.
-    at = np.floor((grid.coordinates()[np.unique(cells)] - low) / step + 1e-9).astype(np.int64)
+    at = np.floor((grid.coordinates_of(np.unique(cells)) - low) / step + 1e-9).astype(np.int64)
     return np.minimum(at, np.array(shape) - 1), shape, periodic
 
 
