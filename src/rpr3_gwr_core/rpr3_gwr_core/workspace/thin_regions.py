@@ -39,7 +39,7 @@ DEFAULT_THIN_REFINEMENT = 4
 # Base blocks refined around each cell of a thin region, along every axis:
 # two reach past the cell that a sub-cell strip leaves from.
 DEFAULT_THIN_REACH = 2
-# Most rebuilds: the 3-RRR's way at th1 = 1.5 rad settles in 7.
+# Most rebuilds, each following a strip a few blocks further.
 DEFAULT_THIN_ROUNDS = 24
 # Share of a patch's base blocks on its border from which it is thin.
 _THIN_BORDER_SHARE = 0.5
