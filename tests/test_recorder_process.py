@@ -2,20 +2,19 @@
 SIGINT, and after SIGKILL it is recovered with all but the last moment."""
 
 import os
-import pathlib
 import signal
 import subprocess
 import time
 
 import pytest
+from node_processes import LIB, exit_status, traced_environment
 from rclpy.node import Node
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
 from rpr3_gwr_nodes.bag_recovery import BagRecoveryError, recover_bag
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-RECORDER = (pathlib.Path(__file__).resolve().parents[1] / "ros2_ws" / "install" / "rpr3_gwr_nodes"
-            / "lib" / "rpr3_gwr_nodes" / "trajectory_recorder")
+RECORDER = LIB / "trajectory_recorder"
 
 
 def _trajectory(k):
@@ -34,9 +33,11 @@ def _publisher_to_the_recorder(node, depth):
 
 
 def test_bag_is_readable_after_sigint(ros_context, tmp_path):
-    bag = tmp_path / "bag"
-    process = subprocess.Popen([str(RECORDER), "--ros-args", "-p", f"bag_path:={bag}"],
-                               env=os.environ.copy())
+    bag, log = tmp_path / "bag", tmp_path / "recorder.log"
+    with open(log, "wb") as output:
+        process = subprocess.Popen([str(RECORDER), "--ros-args", "-p", f"bag_path:={bag}"],
+                                   env=traced_environment(), stdout=output,
+                                   stderr=subprocess.STDOUT)
     node = Node("recorder_feeder", context=ros_context)
     try:
         publisher = _publisher_to_the_recorder(node, 10)
@@ -44,7 +45,7 @@ def test_bag_is_readable_after_sigint(ros_context, tmp_path):
             publisher.publish(_trajectory(k))
         time.sleep(1.0)
         process.send_signal(signal.SIGINT)
-        assert process.wait(timeout=20.0) == 0
+        assert exit_status(process, 20.0, log) == 0, log.read_text()
     finally:
         if process.poll() is None:
             process.kill()

@@ -79,7 +79,12 @@ def run(node_type, executor_type, args=None, *, usage, **executor_options):
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     node = executor = spinner = None
     stop, stopped = threading.Event(), threading.Event()
-    previous = {number: signal.signal(number, lambda *_: stop.set()) for number in _STOP_SIGNALS}
+    # The handler runs between two bytecodes of the main thread, which may
+    # hold the lock inside an Event at that moment: it appends to a list,
+    # which takes no lock (Event.set would wait for the main thread forever).
+    signalled = []
+    previous = {number: signal.signal(number, lambda number, _: signalled.append(number))
+                for number in _STOP_SIGNALS}
     try:
         try:
             node = node_type()
@@ -95,8 +100,8 @@ def run(node_type, executor_type, args=None, *, usage, **executor_options):
         # Python: it waits here, not in rclpy's wait set.  The kernel may
         # hand the signal to another thread (one of DDS's), which does not
         # interrupt this wait: it wakes up now and then to run the handler.
-        while not stop.wait(_SIGNAL_PERIOD):
-            pass
+        while not signalled and not stop.is_set():
+            time.sleep(_SIGNAL_PERIOD)
     except KeyboardInterrupt:
         pass
     finally:
