@@ -330,8 +330,13 @@ def test_the_builder_refines_a_slice_s_thin_regions_unless_told_not_to(ros_conte
             sign = np.sign(REFERENCE.margin(poses[0], joints[0]))
             assert all(np.sign(REFERENCE.margin(pose, at)) == sign for at, pose, _ in followed)
         else:
-            assert response.error_code == PlanPath.Response.ERROR_INFEASIBLE, response.error_msg
-            assert response.feasibility == PlanPath.Response.FEASIBILITY_UNREACHABLE
+            # The grid alone cannot tell: the answer is not "no path".
+            assert response.error_code == PlanPath.Response.ERROR_UNDECIDED, response.error_msg
+            assert response.feasibility == PlanPath.Response.FEASIBILITY_UNDECIDED
+            assert list(response.undecided_patches) and "thin_refinement" in response.error_msg
+            assert list(response.undecided_steps) == pytest.approx([math.radians(3.0)] * 2)
+            assert set(response.undecided_patches) <= set(
+                suite.builder.roadmap.segmentation.patches)
         refused = suite.builder.set_parameters([Parameter("thin_refinement", value=1)])[0]
         assert not refused.successful and "thin_refinement" in refused.reason
     finally:

@@ -42,7 +42,8 @@ _SOURCES = {
                   "PoseEnd", "working_modes", "resolve_ends"),
     ".exceptions": ("GWRError", "InvalidInputError", "GridSizeError", "OutOfGridError",
                     "FixedJointMismatchError", "NoSolutionError", "AssemblyModeError",
-                    "SingularityError", "InfeasiblePathError", "CollisionError",
+                    "SingularityError", "InfeasiblePathError", "UndecidedError",
+                    "CollisionError",
                     "ValidationError", "PlanningTimeoutError"),
 }
 _SOURCE_OF = {name: module for module, names in _SOURCES.items() for name in names}

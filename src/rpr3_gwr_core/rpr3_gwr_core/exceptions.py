@@ -16,6 +16,7 @@ __all__ = [
     "SingularityError",
     "InfeasiblePathError",
     "INFEASIBLE_REASONS",
+    "UndecidedError",
     "CollisionError",
     "ValidationError",
     "PlanningTimeoutError",
@@ -112,6 +113,34 @@ class InfeasiblePathError(GWRError):
                              f"got {reason!r}")
         super().__init__(message)
         self.reason = reason
+
+
+class UndecidedError(GWRError):
+    """The roadmap joins no path between two configurations, and cannot
+    claim that none exists.
+
+    The ends lie in two components of one aspect, and thin regions of that
+    aspect (gateless patches, strips a few cells wide: the grid sees them
+    end where they narrow below a cell) remain at the finest cell the build
+    allowed: on a finer grid one may join the ends' components.  Not an
+    :class:`InfeasiblePathError`: "no path" is a claim that a finer grid
+    must not contradict, and this answer makes none.
+
+    Parameters
+    ----------
+    message : str
+    thin_patches : sequence of int, optional
+        The thin regions' patch ids, ascending.
+    steps : sequence of float, optional
+        The grid's finest step along each of its axes [joint unit].
+    """
+
+    code = "UNDECIDED"
+
+    def __init__(self, message, thin_patches=(), steps=()):
+        super().__init__(message)
+        self.thin_patches = tuple(int(p) for p in thin_patches)
+        self.steps = tuple(float(s) for s in steps)
 
 
 class CollisionError(GWRError, ValueError):

@@ -1,8 +1,9 @@
-"""``--thin-refinement`` of the commands on a mechanism file: by default the
-roadmap's thin regions are refined, so the 3-RRR's way at th1 = 1.5 rad is
-planned where its grid alone answers unreachable; the plan file says how its
-roadmap was built, ``plot`` builds the same, and the cache keeps the two
-builds apart."""
+"""``--thin-refinement`` of the commands on a slice (a mechanism file's or
+the paper's): by default the roadmap's thin regions are refined, so the
+3-RRR's way at th1 = 1.5 rad is planned where its grid alone cannot decide
+(and says how to ask at a finer cell); the plan file says how its roadmap
+was built, ``plot`` builds the same, and the cache keeps the two builds
+apart."""
 
 import json
 import math
@@ -37,11 +38,47 @@ def test_the_way_along_a_thin_region_is_planned_by_default(tmp_path, capsys):
     assert code == 0 and (tmp_path / "plan.png").stat().st_size > 0
 
 
-def test_without_thin_refinement_the_grid_alone_answers_unreachable(tmp_path, capsys):
+def test_without_thin_refinement_the_grid_alone_cannot_decide_and_says_how_to_ask(
+        tmp_path, capsys):
     code, answer = _run([*REQUEST, "--cache-dir", str(tmp_path), "--thin-refinement", "0"],
                         capsys)
-    assert code != 0 and answer["reason"] == "unreachable"
-    assert answer["error"]["code"] == "INFEASIBLE"
+    assert code == 1 and answer["reason"] == "undecided"
+    assert answer["error"]["code"] == "UNDECIDED"
+    undecided = answer["undecided"]
+    assert undecided["thin_patches"] and undecided["finer"] == "--thin-refinement 4"
+    # The file's 3-degree cells, in the command line's degrees.
+    assert undecided["finest_steps"] == pytest.approx({"th2_deg": 3.0, "th3_deg": 3.0})
+    # Asked as it says, the same command plans.
+    code, answer = _run([*REQUEST, "--cache-dir", str(tmp_path),
+                         *undecided["finer"].split()], capsys)
+    assert code == 0 and answer["reason"] == "connected"
+
+
+def test_a_refinement_too_coarse_for_the_strip_says_to_refine_further(tmp_path, capsys):
+    code, answer = _run([*REQUEST, "--cache-dir", str(tmp_path), "--thin-refinement", "2"],
+                        capsys)
+    # Half-width cells still leave the strip thin where it narrows.
+    assert code == 1 and answer["reason"] == "undecided"
+    assert answer["undecided"]["finer"] == "--thin-refinement 4"
+    assert answer["undecided"]["finest_steps"] == pytest.approx({"th2_deg": 1.5,
+                                                                "th3_deg": 1.5})
+
+
+# Two assembly modes of one aspect in two components of the paper's slice at
+# rho1 = 27.5 (a pocket that rho1 must move to leave, test_full_roadmap).
+POCKET = ["--rho1", "27.5", "--start", "31.67154934", "2.14117832", "-101",
+          "--goal", "31.67154934", "2.14117832", "158.048263"]
+
+
+def test_the_paper_s_slices_refine_thin_regions_too(tmp_path, capsys):
+    code, answer = _run(["plan", *POCKET, "--cache-dir", str(tmp_path)], capsys)
+    assert code == 1 and answer["reason"] == "unreachable"
+    assert answer["roadmap"]["thin_refinement"] == 4
+    code, answer = _run(["plan", *POCKET, "--cache-dir", str(tmp_path),
+                         "--thin-refinement", "0"], capsys)
+    assert code == 1 and answer["reason"] == "undecided"
+    assert answer["undecided"]["finer"] == "--thin-refinement 4"
+    assert answer["undecided"]["finest_steps"] == {"rho2": 0.125, "rho3": 0.125}
 
 
 def test_the_cache_keeps_a_thin_refined_build_apart_from_the_grid_alone(tmp_path):
@@ -56,8 +93,6 @@ def test_the_cache_keeps_a_thin_refined_build_apart_from_the_grid_alone(tmp_path
 
 
 @pytest.mark.parametrize("argv, reason", [
-    (["plan", "--start", "12", "18", "122.82", "--goal", "10", "25", "-24.24",
-      "--thin-refinement", "4"], "--thin-refinement needs --mechanism"),
     ([*REQUEST, "--thin-refinement", "1"], "--thin-refinement is 0 (off) or at least 2"),
     ([*REQUEST, "--thin-refinement", "-2"], "'-2' is negative"),
     ([*REQUEST, "--thin-refinement", "two"], "'two' is not an integer"),

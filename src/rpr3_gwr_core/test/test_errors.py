@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from rpr3_gwr_core.exceptions import (INFEASIBLE_REASONS, GWRError, InfeasiblePathError,
-                                      InvalidInputError, OutOfGridError)
+                                      InvalidInputError, OutOfGridError, UndecidedError)
 from rpr3_gwr_core.paper import rho1_slice
 from rpr3_gwr_core.workspace import compute_field
 from rpr3_gwr_core.mechanisms.rpr3 import PAPER_GEOMETRY, ThreeRPR, beta_from_sides
@@ -28,6 +28,13 @@ def test_an_infeasible_path_keeps_its_reason_across_processes(reason):
     # The plan workers send their errors to the node through a pipe.
     error = pickle.loads(pickle.dumps(InfeasiblePathError("no path", reason)))
     assert (type(error), str(error), error.reason) == (InfeasiblePathError, "no path", reason)
+
+
+def test_an_undecided_answer_keeps_where_and_at_which_size_across_processes():
+    error = pickle.loads(pickle.dumps(UndecidedError("undecided", [113, 120], [0.0625, 0.25])))
+    assert (type(error), str(error), error.thin_patches, error.steps) == (
+        UndecidedError, "undecided", (113, 120), (0.0625, 0.25))
+    assert not isinstance(error, InfeasiblePathError)
 
 
 def test_an_infeasible_path_refuses_a_reason_callers_cannot_map():

@@ -10,9 +10,9 @@ import pathlib
 import numpy as np
 import pytest
 
-from rpr3_gwr_core.exceptions import InfeasiblePathError, InvalidInputError
+from rpr3_gwr_core.exceptions import InvalidInputError, UndecidedError
 from rpr3_gwr_core.io.mechanism_file import load_mechanism_file, roadmap_grid
-from rpr3_gwr_core.planning import Planner
+from rpr3_gwr_core.planning import Planner, PoseEnd, resolve_ends
 from rpr3_gwr_core.workspace.roadmap import build_roadmap
 from rpr3_gwr_core.workspace.thin_regions import refine_thin_regions, thin_patches
 
@@ -48,12 +48,31 @@ def refined():
     return refine_thin_regions(*_slice("three_rrr.yaml", {"th1": TH1}))
 
 
-def test_the_default_grid_misses_the_way():
+def test_the_grid_alone_misses_the_way_and_says_it_cannot_decide():
     roadmap = build_roadmap(*_slice("three_rrr.yaml", {"th1": TH1}))
-    assert thin_patches(roadmap)
-    with pytest.raises(InfeasiblePathError) as raised:
-        Planner(roadmap).plan(START, GOAL)
-    assert raised.value.reason == "unreachable"
+    planner = Planner(roadmap)
+    start = planner.locate(START)
+    thin = thin_patches(roadmap)
+    assert start.patch in thin
+    with pytest.raises(UndecidedError) as raised:
+        planner.plan(START, GOAL)
+    aspect = roadmap.graph.nodes[start.patch]["aspect"]
+    assert raised.value.thin_patches == tuple(
+        p for p in thin if roadmap.graph.nodes[p]["aspect"] == aspect)
+    assert raised.value.steps == roadmap.grid.steps
+
+
+@pytest.mark.parametrize("open_ends", [("goal",), ("start", "goal")])
+def test_a_pose_whose_working_modes_the_grid_alone_cannot_decide_is_undecided(open_ends):
+    roadmap = build_roadmap(*_slice("three_rrr.yaml", {"th1": TH1}))
+    planner = Planner(roadmap)
+    ends = {"start": START, "goal": GOAL}
+    for name in open_ends:
+        ends[name] = PoseEnd(tuple(planner.locate(ends[name]).pose))
+    with pytest.raises(UndecidedError) as raised:
+        resolve_ends(planner, ends["start"], ends["goal"])
+    assert planner.locate(START).patch in raised.value.thin_patches
+    assert "working modes" in str(raised.value)
 
 
 def test_refining_the_thin_region_settles_with_none_left(refined):

@@ -368,7 +368,10 @@ class PlannerClient(Node):
             The answer: ``success``, ``error_code`` (``ERROR_*``),
             ``error_msg``, ``feasibility`` (``FEASIBILITY_*``), the
             trajectory and the roadmap that answered.  Errors of the request
-            come back here, never as exceptions.
+            come back here, never as exceptions.  ``ERROR_INFEASIBLE`` says
+            that no path exists; ``ERROR_UNDECIDED`` that the roadmap cannot
+            say, with where (``undecided_patches``) and at which cell
+            (``undecided_steps``).
 
         Raises
         ------

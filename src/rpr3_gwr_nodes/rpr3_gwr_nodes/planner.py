@@ -55,7 +55,11 @@ means no scene.  The scene planned with is echoed on ``~/current_scene``
 without a scene).  A start or goal that collides answers
 ``ERROR_IN_COLLISION``, ends the roadmap joins and the scene does not (or
 clear ends whose grid cell the scene leaves no way out)
-``ERROR_INFEASIBLE`` with ``FEASIBILITY_BLOCKED``.  The plan workers apply
+``ERROR_INFEASIBLE`` with ``FEASIBILITY_BLOCKED``.  Ends in two components
+of one aspect with thin regions of that aspect left (the roadmap cannot say
+that no path exists) answer ``ERROR_UNDECIDED`` with
+``FEASIBILITY_UNDECIDED``, the thin regions and the grid's finest steps;
+a builder with a larger ``thin_refinement`` asks at a finer cell.  The plan workers apply
 each scene too, and plan in it once all of them have it; meanwhile its
 requests are planned in the node's process.
 """
@@ -73,7 +77,7 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallb
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from rpr3_gwr_core.exceptions import (GWRError, InfeasiblePathError, InvalidInputError,
-                                      PlanningTimeoutError)
+                                      PlanningTimeoutError, UndecidedError)
 from rpr3_gwr_core.io.cache import find_cached_planning
 from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
 from rpr3_gwr_core.io.paths import default_cache_dir
@@ -137,17 +141,23 @@ ERROR_CODES = {
     "VALIDATION_FAILED": PlanPath.Response.ERROR_VALIDATION_FAILED,
     "TIMEOUT": PlanPath.Response.ERROR_TIMEOUT,
     "IN_COLLISION": PlanPath.Response.ERROR_IN_COLLISION,
+    "UNDECIDED": PlanPath.Response.ERROR_UNDECIDED,
 }
 FEASIBILITY = {
     "same_patch": PlanPath.Response.FEASIBILITY_SAME_PATCH,
     "connected": PlanPath.Response.FEASIBILITY_CONNECTED,
     "other_aspect": PlanPath.Response.FEASIBILITY_OTHER_ASPECT,
     "unreachable": PlanPath.Response.FEASIBILITY_UNREACHABLE,
+    "undecided": PlanPath.Response.FEASIBILITY_UNDECIDED,
     # In a scene: one part of a patch (part of the same patch), and cut apart
     # by the scene.
     "same_part": PlanPath.Response.FEASIBILITY_SAME_PATCH,
     "blocked": PlanPath.Response.FEASIBILITY_BLOCKED,
 }
+# How an undecided answer is asked at a finer cell: by the builder, whose
+# roadmap this planner only receives.
+_FINER = ("a roadmap builder with a larger thin_refinement parameter (finer cells where "
+          "thin regions are; default 4, 0 for the grid alone) asks at a finer cell")
 PLAN_STATUS = {
     PlanStatus.EXACT_SOLUTION: PlanPath.Response.PLAN_STATUS_EXACT_SOLUTION,
     PlanStatus.APPROXIMATE_SOLUTION: PlanPath.Response.PLAN_STATUS_APPROXIMATE_SOLUTION,
@@ -649,6 +659,12 @@ class PlannerNode(Node):
                 return _error(response, PlanPath.Response.ERROR_NO_ROADMAP,
                               "no roadmap received yet on 'field' and 'roadmap'")
             return self._answer(request, state, begin)
+        except UndecidedError as exc:
+            response = _error(_named(state), PlanPath.Response.ERROR_UNDECIDED,
+                              f"{exc}; {_FINER}", PlanPath.Response.FEASIBILITY_UNDECIDED)
+            response.undecided_patches = list(exc.thin_patches)
+            response.undecided_steps = list(exc.steps)
+            return response
         except GWRError as exc:
             code = ERROR_CODES.get(exc.code, PlanPath.Response.ERROR_INTERNAL)
             return _error(_named(state), code, str(exc),
@@ -821,6 +837,7 @@ _MODE_FEASIBILITY = {
     "connected": AssemblyMode.FEASIBILITY_CONNECTED,
     "other_aspect": AssemblyMode.FEASIBILITY_OTHER_ASPECT,
     "unreachable": AssemblyMode.FEASIBILITY_UNREACHABLE,
+    "undecided": AssemblyMode.FEASIBILITY_UNDECIDED,
 }
 
 

@@ -143,10 +143,9 @@ def _mechanism_options(command):
                          help="with --mechanism: a joint held fixed (repeatable) [length "
                               "unit, deg for an angle]; the others are the roadmap's axes")
     command.add_argument("--thin-refinement", type=_count, metavar="N",
-                         help="with --mechanism: fine points per cell where the roadmap "
-                              "refines its thin regions, strips a few cells wide that may go "
-                              "on narrower than a cell (default 4); 0 leaves the grid as it "
-                              "is")
+                         help="fine points per cell where a slice's roadmap refines its "
+                              "thin regions, strips a few cells wide that may go on narrower "
+                              "than a cell (default 4); 0 leaves the grid as it is")
 
 
 def _figure(path):

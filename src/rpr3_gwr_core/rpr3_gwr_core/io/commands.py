@@ -22,14 +22,15 @@ import time
 
 import numpy as np
 
-from ..exceptions import GWRError, InfeasiblePathError, InvalidInputError
+from ..exceptions import GWRError, InfeasiblePathError, InvalidInputError, UndecidedError
 from ..mechanisms import Mechanism, mechanism_from_dict
 from ..mechanisms.base import working_mode_label
 from ..paper import FULL_BASE_GRID, FULL_REFINEMENT, PAPER_GEOMETRY, rho1_slice
-from ..workspace import build_roadmap
+from ..workspace import build_roadmap, refine_thin_regions
 from ..workspace.adaptive import grid_from_dict
 from ..workspace.grid import check_roadmap_grid
 from ..workspace.progress import part
+from ..workspace.thin_regions import DEFAULT_THIN_REFINEMENT
 from .limits import MAX_LEG
 
 __all__ = ["run"]
@@ -193,9 +194,8 @@ def _cusps(args, progress, workers):
         if type(mechanism).refine_cusp is Mechanism.refine_cusp:
             raise InvalidInputError(f"the {mechanism.kind} has no cusp equations: 'cusps' "
                                     "takes mechanisms that have them (the 3-RPR)")
-    thin = None if args.mechanism is None else _thin_refinement(args, grid)
     roadmap, _ = cached_roadmap(mechanism, grid, args.cache_dir, progress, workers=workers,
-                                thin_refinement=thin)
+                                thin_refinement=_thin_refinement(args, grid))
     try:
         cusps = find_cusps(roadmap)
     except NotImplementedError as exc:
@@ -313,7 +313,8 @@ def _located_modes(args, mechanism, progress, workers):
         else:
             grid = rho1_slice(args.joints[0])
             roadmap, index, _ = cached_planning(PAPER_GEOMETRY, grid, args.cache_dir,
-                                                progress, workers=workers)
+                                                progress, workers=workers,
+                                                thin_refinement=_thin_refinement(args, grid))
             where = ["--rho1", f"{args.joints[0]:g}"]
     else:
         if not args.full and not args.fix:
@@ -390,8 +391,14 @@ def _roadmap(args, progress, workers):
             raise InvalidInputError("--slice-figure needs --full")
         grid = rho1_slice(args.rho1, tuple(args.rho2), tuple(args.rho3), args.step)
         check_roadmap_grid(PAPER_GEOMETRY, grid)
-        roadmap, hit = build_roadmap(PAPER_GEOMETRY, grid, method=args.method,
-                                     progress=progress, workers=workers), False
+        thin = _thin_refinement(args, grid)
+        if thin is None:
+            roadmap = build_roadmap(PAPER_GEOMETRY, grid, method=args.method,
+                                    progress=progress, workers=workers)
+        else:
+            roadmap, _ = refine_thin_regions(PAPER_GEOMETRY, grid, thin, method=args.method,
+                                             progress=progress, workers=workers)
+        hit = False
     summary = roadmap_summary(roadmap)
     summary["cusps"] = [_in_degrees(c, roadmap.mechanism) for c in summary["cusps"]]
     world = None
@@ -464,11 +471,9 @@ def _paper_slice_options(args, names):
 
 
 def _refuse_file_options(args):
-    """``--fix`` and ``--thin-refinement`` are a mechanism file's."""
-    given = "--fix" if args.fix else "--thin-refinement" if args.thin_refinement is not None \
-        else None
-    if given:
-        raise InvalidInputError(f"{given} needs --mechanism")
+    """``--fix`` is a mechanism file's."""
+    if args.fix:
+        raise InvalidInputError("--fix needs --mechanism")
 
 
 def _thin_refinement(args, grid):
@@ -476,7 +481,6 @@ def _thin_refinement(args, grid):
     refined) when 0, or when the grid is not uniform (the file's box over
     more cells than a uniform grid may have: refined by rule already)."""
     from ..workspace import Grid
-    from ..workspace.thin_regions import DEFAULT_THIN_REFINEMENT
 
     if args.thin_refinement == 1:
         raise InvalidInputError("--thin-refinement is 0 (off) or at least 2 fine points a "
@@ -565,11 +569,13 @@ def _plan(args, progress, workers):
         roadmap_doc = {"mechanism": PAPER_GEOMETRY.to_dict(), "full": True}
     else:
         grid = rho1_slice(args.rho1, step=args.step)
+        thin = _thin_refinement(args, grid)
         roadmap, index, _ = cached_planning(PAPER_GEOMETRY, grid, args.cache_dir, progress,
-                                            workers=workers)
+                                            workers=workers, thin_refinement=thin)
         start, goal = ((args.rho1, *legs) if legs is not None else None
                        for legs in (args.start, args.goal))
-        roadmap_doc = {"mechanism": PAPER_GEOMETRY.to_dict(), "grid": grid.to_dict()}
+        roadmap_doc = {"mechanism": PAPER_GEOMETRY.to_dict(), "grid": grid.to_dict(),
+                       "thin_refinement": thin}
     start, goal = (pose or joints for pose, joints in zip(poses, (start, goal)))
     return _answer(args, progress, roadmap, index, start, goal, options, roadmap_doc)
 
@@ -700,11 +706,35 @@ def _answer(args, progress, roadmap, index, start, goal, options, roadmap_doc):
         reason = exc.reason if isinstance(exc, InfeasiblePathError) else None
         result = dict(header, feasible=False, reason=reason or exc.code.lower(),
                       error={"code": exc.code, "message": str(exc)})
+        if isinstance(exc, UndecidedError):
+            result["undecided"] = _undecided(args, exc, roadmap, roadmap_doc)
         code = 1
     result["plan_time_s"] = time.perf_counter() - begin
     if args.output:
         _save(args.output, json.dumps(result))
     return result, code
+
+
+def _undecided(args, exc, roadmap, roadmap_doc):
+    """Where and at which size the roadmap could not decide, and the option
+    that asks at a finer size: on a uniform grid ``--thin-refinement`` twice
+    as fine (the default where it was 0); on a file's whole box (an
+    adaptive grid) its steps halved; on the paper's full roadmap a slice."""
+    mechanism = roadmap.mechanism
+    joint_angles, _ = _angles(mechanism)
+    steps = {mechanism.joint_names[axis.joint] + ("_deg" if joint_angles[axis.joint] else ""):
+             math.degrees(step) if joint_angles[axis.joint] else step
+             for axis, step in zip(roadmap.grid.axes, exc.steps)}
+    thin = roadmap_doc.get("thin_refinement")
+    if thin is not None:
+        finer = f"--thin-refinement {2 * thin}"
+    elif "thin_refinement" in roadmap_doc and args.thin_refinement == 0:
+        finer = f"--thin-refinement {DEFAULT_THIN_REFINEMENT}"
+    elif args.mechanism is not None:
+        finer = "the steps of the mechanism file's box halved"
+    else:
+        finer = "a slice (--rho1 R), refined where its thin regions are"
+    return {"thin_patches": list(exc.thin_patches), "finest_steps": steps, "finer": finer}
 
 
 def _plan_shown(plan, mechanism):

@@ -3,7 +3,10 @@
 Feasibility comes from the roadmap alone: two patches are connectible exactly
 when they lie in one connected component of the GWR.  At the grid's
 resolution this is a guarantee both ways: every path the roadmap connects is
-realised by the cell search, which crosses only gates.
+realised by the cell search, which crosses only gates.  Two components of
+one aspect are apart only as far as the grid can tell: where that aspect
+has thin regions left (:func:`~rpr3_gwr_core.workspace.thin_patches`), a
+finer grid may join them, and the answer is "undecided", not "unreachable".
 
 Global paths are the shortest sequences of patches (fewest gates, as in the
 paper, whose A* search is unweighted); all of them are returned, ranked by
@@ -20,6 +23,7 @@ import networkx as nx
 import numpy as np
 
 from ..exceptions import InvalidInputError
+from ..workspace import thin_patches
 
 __all__ = ["Feasibility", "GlobalPath", "PatchGraph", "feasibility", "global_paths",
            "longer_paths"]
@@ -37,11 +41,18 @@ class Feasibility:
     reason : str
         ``"same_patch"``, ``"connected"``, ``"other_aspect"`` (the patches
         have different signs of det Jx, which no singularity-free motion
-        changes) or ``"unreachable"`` (same aspect, no chain of gates).
+        changes), ``"unreachable"`` (same aspect, no chain of gates, and no
+        thin region of that aspect left) or ``"undecided"`` (no chain of
+        gates, but thin regions of that aspect left, which a finer grid may
+        join to either patch).
+    thin_patches : tuple of int
+        With ``"undecided"``, the thin regions of the aspect, ascending;
+        else empty.
     """
 
     feasible: bool
     reason: str
+    thin_patches: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -61,7 +72,8 @@ class GlobalPath:
 
 class PatchGraph:
     """The roadmap's patches as a graph, with the lookups of repeated global
-    queries: connected components, aspects, and gate edges weighted by length.
+    queries: connected components, aspects, the thin regions of each aspect,
+    and gate edges weighted by length.
 
     Parameters
     ----------
@@ -79,6 +91,9 @@ class PatchGraph:
             for node in nodes:
                 self.component[node] = label
         self.aspect = nx.get_node_attributes(self.graph, "aspect")
+        self.thin = {}
+        for pid in thin_patches(roadmap):
+            self.thin.setdefault(self.aspect[pid], []).append(pid)
         seg = roadmap.segmentation
         grid = seg.field.grid
         pids = index.pids.tolist()
@@ -127,6 +142,9 @@ def feasibility(index, start_patch, goal_patch):
         return Feasibility(True, "connected")
     if index.aspect[start_patch] != index.aspect[goal_patch]:
         return Feasibility(False, "other_aspect")
+    thin = index.thin.get(index.aspect[start_patch])
+    if thin:
+        return Feasibility(False, "undecided", tuple(thin))
     return Feasibility(False, "unreachable")
 
 

@@ -49,8 +49,9 @@ class AssemblyMode:
     feasibility : str or None
         From the start mode given to :func:`assembly_modes`: ``"start"``
         for that mode itself, else the roadmap's answer (``"same_patch"``,
-        ``"connected"``, ``"other_aspect"``, ``"unreachable"``); None without
-        a start mode, or where either lies on no patch.
+        ``"connected"``, ``"other_aspect"``, ``"unreachable"``,
+        ``"undecided"``); None without a start mode, or where either lies on
+        no patch.
     """
 
     configuration: tuple

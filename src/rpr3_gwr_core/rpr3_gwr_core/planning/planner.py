@@ -33,7 +33,7 @@ import math
 import numpy as np
 
 from ..exceptions import (GWRError, InfeasiblePathError, InvalidInputError,
-                          PlanningTimeoutError, ValidationError)
+                          PlanningTimeoutError, UndecidedError, ValidationError)
 from .cell_search import DEFAULT_CLEARANCE_WEIGHT, CellSearch
 from .global_planning import (GlobalPath, PatchGraph, feasibility, global_paths,
                               longer_paths)
@@ -301,6 +301,8 @@ class Planner:
             When an end collides or breaks a limit of the scene.
         InfeasiblePathError
             When the roadmap, or the scene, joins no path between them.
+        UndecidedError
+            When neither does, and thin regions of the ends' aspect are left.
         """
         s, g, world = problem.start, problem.goal, problem.world
         if world is not None:
@@ -317,6 +319,14 @@ class Planner:
                     f"the {which} is clear of the scene, its grid cell's solution is not (an "
                     "obstacle or a limit lies within a cell of it): on this grid no way leaves "
                     f"the {which}; a finer grid resolves the scene nearer to it", "blocked")
+        if answer.reason == "undecided":
+            thin = feasibility(self.patch_graph, s.patch, g.patch).thin_patches
+            grid = self.roadmap.grid
+            raise UndecidedError(
+                f"undecided: no chain of gates joins patch {s.patch} to patch {g.patch}, and "
+                f"thin regions of their aspect are left ({_patches(thin)}) at the grid's "
+                f"finest cell ({_steps(grid, self.roadmap.mechanism)}): a finer cell may join "
+                "them", thin, grid.steps)
         if not answer.feasible:
             # The scene is resolved cell by cell: where an obstacle or a limit
             # leaves a band narrower than a cell (along a fold, where the
@@ -476,3 +486,13 @@ class Planner:
         """
         for key, index in other._world_indices.items():
             self._world_indices.setdefault(key, index.on_roadmap(self.roadmap))
+
+
+def _steps(grid, mechanism):
+    """The grid's finest step along each axis, named by joint [joint unit]."""
+    return ", ".join(f"{mechanism.joint_names[axis.joint]} step {step:.4g}"
+                     for axis, step in zip(grid.axes, grid.steps))
+
+
+def _patches(ids):
+    return f"patch{'es' if len(ids) > 1 else ''} {', '.join(map(str, ids))}"

@@ -20,7 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..exceptions import (AssemblyModeError, FixedJointMismatchError, InfeasiblePathError,
-                          InvalidInputError, NoSolutionError, OutOfGridError, SingularityError)
+                          InvalidInputError, NoSolutionError, OutOfGridError, SingularityError,
+                          UndecidedError)
 from ..mechanisms.base import finite_vectors, working_mode_label
 from .global_planning import feasibility
 from .locate import DEFAULT_MODE_TOL, check_on_grid
@@ -33,7 +34,8 @@ __all__ = ["WorkingMode", "PoseEnd", "PlanEnds", "working_modes", "resolve_ends"
 _SAME_POSE = 1e-6
 # How a working mode's patch lies apart from the other end's, by the
 # roadmap's answer (:class:`~.global_planning.Feasibility`).
-_APART = {"other_aspect": "another aspect", "unreachable": "another component"}
+_APART = {"other_aspect": "another aspect", "unreachable": "another component",
+          "undecided": "another component, with thin regions of its aspect left"}
 
 
 @dataclass(frozen=True, repr=False)
@@ -198,6 +200,9 @@ def resolve_ends(planner, start, goal, mode_tol=DEFAULT_MODE_TOL):
         left open is joined to the other end: its message lists every
         working mode and why it is out (outside the box, off the slice,
         singular, in another component).
+    UndecidedError
+        Instead, when the roadmap joins none, and thin regions are left in
+        the aspect of a working mode in another component.
     FixedJointMismatchError, OutOfGridError, AssemblyModeError, SingularityError
         As :meth:`Planner.locate`, for an end given as a configuration or a
         working mode that a mode left open is compared with.
@@ -220,9 +225,9 @@ def resolve_ends(planner, start, goal, mode_tol=DEFAULT_MODE_TOL):
     which = ("start", "goal")[open_ends[0]]
     if not reached:
         other = ("start", "goal")[1 - open_ends[0]]
-        raise _unreachable(f"no working mode of the {which} pose is joined to the {other} "
-                           f"(patch {anchor.patch}); its working modes: "
-                           + _listed(modes, answers))
+        raise _unjoined(planner, [anchor.patch] if "undecided" in answers else [],
+                        f"no working mode of the {which} pose is joined to the {other} "
+                        f"(patch {anchor.patch}); its working modes: " + _listed(modes, answers))
     best = max(reached, key=lambda mode: abs(mode.margin))
     chosen = [_configuration(fixed), best.configuration]
     if open_ends[0] == 0:
@@ -336,11 +341,12 @@ def _feasibility(planner, patch, mode):
 def _best_pair(planner, start_modes, goal_modes):
     """The start and goal working modes the roadmap joins whose smaller
     margin magnitude is largest."""
-    pairs = [(s, g) for s in start_modes for g in goal_modes
-             if s.patch is not None and g.patch is not None
-             and _feasibility(planner, s.patch, g) in ("same_patch", "connected")]
+    answers = [(s, g, _feasibility(planner, s.patch, g)) for s in start_modes
+               for g in goal_modes if s.patch is not None]
+    pairs = [(s, g) for s, g, answer in answers if answer in ("same_patch", "connected")]
     if not pairs:
-        raise _unreachable(
+        raise _unjoined(
+            planner, [s.patch for s, _, answer in answers if answer == "undecided"],
             "no working mode of the start pose is joined to one of the goal pose (those on "
             "a patch lie in another component or aspect); the start's working modes: "
             + _listed(start_modes, [None] * len(start_modes)) + "; the goal's: "
@@ -362,7 +368,15 @@ def _listed(modes, answers):
     return "; ".join(parts)
 
 
-def _unreachable(message):
-    """The ``InfeasiblePathError`` of working modes none of which serves."""
-    return InfeasiblePathError(message, "unreachable")
+def _unjoined(planner, undecided, message):
+    """The error of working modes none of which the roadmap joins to the
+    other end: an ``UndecidedError`` when the roadmap could not decide for
+    some (``undecided``: their patches), else an ``InfeasiblePathError``."""
+    if not undecided:
+        return InfeasiblePathError(message, "unreachable")
+    graph = planner.patch_graph
+    thin = sorted({pid for patch in undecided for pid in graph.thin[graph.aspect[patch]]})
+    return UndecidedError(message + f"; thin regions of their aspect are left (patches "
+                          f"{', '.join(map(str, thin))}): a finer cell may join them", thin,
+                          planner.roadmap.grid.steps)
 

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..exceptions import InvalidInputError
 from ..workspace.components import find_root, join
+from ..workspace.thin_regions import thin_patches
 from .bodies import mechanism_bodies
 from .collision import FREE, check_bodies, compile_scene
 from .scene import EMPTY_SCENE
@@ -48,8 +49,9 @@ class SceneFeasibility:
     reason : str
         ``"same_part"``, ``"connected"``, ``"in_collision"`` (the start's or
         goal's cell solution is blocked), ``"blocked"`` (the roadmap joins
-        them, the scene does not), ``"other_aspect"`` or ``"unreachable"``
-        (as :class:`~rpr3_gwr_core.planning.global_planning.Feasibility`).
+        them, the scene does not), ``"other_aspect"``, ``"unreachable"`` or
+        ``"undecided"`` (as
+        :class:`~rpr3_gwr_core.planning.global_planning.Feasibility`).
     start_part, goal_part : int
         Their parts, -1 for a blocked one.
     """
@@ -118,6 +120,7 @@ class WorldIndex:
             for node in nodes:
                 self._component[node] = label
         self._aspect = nx.get_node_attributes(roadmap.graph, "aspect")
+        self._thin_aspects = {self._aspect[pid] for pid in thin_patches(roadmap)}
 
     def _read(self, roadmap):
         """Refer to the roadmap's arrays (those of the field and the
@@ -227,7 +230,7 @@ class WorldIndex:
             return "connected"
         if self._aspect[start_patch] != self._aspect[goal_patch]:
             return "other_aspect"
-        return "unreachable"
+        return "undecided" if self._aspect[start_patch] in self._thin_aspects else "unreachable"
 
 
 class SceneRoadmap:
