@@ -122,6 +122,42 @@ class MovingBaseReference:
                         found.append(pose)
         return np.array(sorted(found, key=lambda pose: pose[2])).reshape(-1, 3)
 
+    def slice_lattice(self, q1, n):
+        """The configuration space at fixed ``q1`` on an n x n lattice of the
+        torus (phi, alpha), one sheet per pair of sides (+1 +1, +1 -1, -1
+        +1, -1 -1): the joints, shape (4, n, n, 3), NaN where a sheet has no
+        point, the poses (4, n, n, 3), the signed margins (4, n, n), and
+        the pairs of points of one aspect where two sheets meet (a leg's
+        two sides, where its circles touch within a lattice step: a fold of
+        the torus map, which a motion crosses with the joint turning back),
+        as flat index arrays for :func:`~torus_components.torus_components`."""
+        angles = 2 * math.pi * (np.arange(n) + 0.5) / n - math.pi
+        phi, alpha = np.meshgrid(angles, angles, indexing="ij")
+        sides = ((1, 1), (1, -1), (-1, 1), (-1, -1))
+        joints = np.empty((4, n, n, 3))
+        poses = np.empty((4, n, n, 3))
+        for k, (side2, side3) in enumerate(sides):
+            with np.errstate(invalid="ignore"):
+                q2, q3, poses[k] = self.torus_map(q1, phi, alpha, side2, side3)
+            joints[k] = np.stack([np.full_like(q2, q1), q2, q3], -1)
+        defined = np.isfinite(joints).all(-1)
+        margins = np.full((4, n, n), np.nan)
+        margins[defined] = self.margin(poses[defined], joints[defined])
+        index = np.arange(4 * n * n).reshape(4, n, n)
+        joins = []
+        # Sheets k and k ^ 2 differ in leg 2's side, k and k ^ 1 in leg 3's.
+        for leg, flip in ((1, 2), (2, 1)):
+            for k in (k for k in range(4) if k < k ^ flip):
+                undefined = ~np.isfinite(joints[k, ..., leg])
+                near_fold = np.zeros((n, n), dtype=bool)
+                for axis in (0, 1):
+                    for shift in (-1, 1):
+                        near_fold |= np.roll(undefined, shift, axis=axis)
+                with np.errstate(invalid="ignore"):
+                    meet = near_fold & (np.sign(margins[k]) == np.sign(margins[k ^ flip]))
+                joins.append((index[k][meet], index[k ^ flip][meet]))
+        return joints, poses, margins, joins
+
     def follow(self, pose, joints, steps=400):
         """Own continuation along a polyline of joints: Newton with a
         finite-difference Jacobian from the previous pose at each dense

@@ -187,6 +187,30 @@ def random_slice_configurations(rng, rho1, count):
     return found
 
 
+def slice_lattice(rho1, n):
+    """The configuration space at fixed ``rho1`` on an n x n lattice of the
+    (theta1, alpha) torus (B1 on leg 1's circle): each point's legs, shape
+    (n, n, 3), pose (n, n, 3) and signed margin (n, n), computed at once as
+    :func:`legs_of` and :func:`margin_of` compute one."""
+    angles = 2 * math.pi * (np.arange(n) + 0.5) / n - math.pi
+    theta1, alpha = np.meshgrid(angles, angles, indexing="ij")
+    x, y = BASE[0][0] + rho1 * np.cos(theta1), BASE[0][1] + rho1 * np.sin(theta1)
+    points = [(x, y, 0.0 * x, 0.0 * x),
+              (x + D1 * np.cos(alpha), y + D1 * np.sin(alpha), -D1 * np.sin(alpha),
+               D1 * np.cos(alpha)),
+              (x + D3 * np.cos(alpha + BETA), y + D3 * np.sin(alpha + BETA),
+               -D3 * np.sin(alpha + BETA), D3 * np.cos(alpha + BETA))]
+    legs, rows = [], []
+    for (bx, by, dbx, dby), (ax, ay) in zip(points, BASE):
+        ux, uy = bx - ax, by - ay
+        rho = np.hypot(ux, uy)
+        legs.append(rho)
+        row = np.stack([ux / rho, uy / rho, (ux * dbx + uy * dby) / rho / SCALE], -1)
+        rows.append(row / np.linalg.norm(row, axis=-1, keepdims=True))
+    margin = np.linalg.det(np.stack(rows, -2))
+    return np.stack(legs, -1), np.stack([x, y, alpha], -1), margin
+
+
 def same_aspect_pairs(configurations):
     """Consecutive configurations of the same sign of det(Jx), paired."""
     positive = [c for c in configurations if margin_of(c[1]) > 0]
