@@ -24,7 +24,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rpr3_gwr_core.io.mechanism_file import load_mechanism_file
 from rpr3_gwr_msgs.action import ExecuteTrajectory
-from rpr3_gwr_msgs.msg import Configuration
+from rpr3_gwr_msgs.msg import AssemblyMode, Configuration
 from rpr3_gwr_msgs.srv import PlanPath
 from rpr3_gwr_nodes.planner import PlannerNode
 from rpr3_gwr_nodes.profiles import SENSOR_QOS
@@ -337,6 +337,10 @@ def test_the_builder_refines_a_slice_s_thin_regions_unless_told_not_to(ros_conte
             assert list(response.undecided_steps) == pytest.approx([math.radians(3.0)] * 2)
             assert set(response.undecided_patches) <= set(
                 suite.builder.roadmap.segmentation.patches)
+            modes = suite.client.assembly_modes(list(THIN_TH), THIN_MODES[0],
+                                                timeout_sec=TIMEOUT).modes
+            goal = min(modes, key=lambda m: abs(wrap(m.configuration.mode - THIN_MODES[1])))
+            assert goal.feasibility == AssemblyMode.FEASIBILITY_UNDECIDED
         refused = suite.builder.set_parameters([Parameter("thin_refinement", value=1)])[0]
         assert not refused.successful and "thin_refinement" in refused.reason
     finally:
