@@ -34,9 +34,10 @@ REQUESTS = 30
 # Limits shorter and longer than a plan of the paper's example [s].
 LIMITS = (0.01, 0.05, 0.2, 1.0)
 # How late past its limit an answer may arrive: its sending and transport,
-# and a plan step that cannot be cut, on a busy machine (at most 0.06 s on
-# 2 cores beside a test run) [s].
-LATE = 0.15
+# a plan step that cannot be cut, and the scheduling of two plan workers,
+# the planner, the builder and four clients on two cores, which stalls the
+# planner's executor for up to 0.2 s now and then in a full test run [s].
+LATE = 0.5
 
 
 @pytest.mark.slow
