@@ -94,6 +94,20 @@ def test_builder_rebuilds_on_rho1_and_refuses_bad_grids(rig):
     assert builder.roadmap.grid.fixed_value(0) == 13.0
 
 
+def test_a_slice_refined_around_a_thin_region_is_published_with_its_cusps(rig):
+    # At rho1 = 27.5 the rig's 0.5 grid has a thin region, as the default
+    # 0.125 one has.
+    builder, fields = rig.builder, rig.fields
+    assert rig.arrived.wait(TIMEOUT), "no field published"
+    assert builder.set_parameters([Parameter("fixed_value", value=27.5)])[0].successful
+    deadline = time.monotonic() + TIMEOUT
+    while fields[-1].grid.fixed[0].value != 27.5:
+        assert time.monotonic() < deadline, "no field republished after the change"
+        time.sleep(0.05)
+    assert fields[-1].grid.refinement and len(fields[-1].grid.refined_blocks)
+    assert fields[-1].cusps and all(cusp.regions for cusp in fields[-1].cusps)
+
+
 def test_builder_refuses_grids_without_a_roadmap_and_keeps_the_last_good(rig):
     builder, fields, arrived = rig.builder, rig.fields, rig.arrived
     assert arrived.wait(TIMEOUT), "no field published"

@@ -81,6 +81,15 @@ def test_the_paper_s_slices_refine_thin_regions_too(tmp_path, capsys):
     assert answer["undecided"]["finest_steps"] == {"rho2": 0.125, "rho3": 0.125}
 
 
+def test_a_paper_slice_refined_around_its_thin_region_is_summarised_with_its_cusps(
+        tmp_path, capsys):
+    code, summary = _run(["roadmap", "--rho1", "27.5", "--cache-dir", str(tmp_path),
+                          "--field-figure", str(tmp_path / "field.png")], capsys)
+    assert code == 0 and summary["refinement"]["refined_blocks"] > 0
+    assert summary["cusps"] and all(cusp["regions"] for cusp in summary["cusps"])
+    assert (tmp_path / "field.png").stat().st_size > 10_000
+
+
 def test_the_cache_keeps_a_thin_refined_build_apart_from_the_grid_alone(tmp_path):
     described = load_mechanism_file(THREE_RRR)
     grid = roadmap_grid(described, {"th1": 1.5})

@@ -20,6 +20,7 @@ import numba
 import numpy as np
 
 from ..exceptions import InvalidInputError, OutOfGridError
+from .adaptive import AdaptiveGrid
 from .progress import part
 
 __all__ = ["Cusp", "find_cusps", "known_cusps", "cusp_curves"]
@@ -88,6 +89,7 @@ def find_cusps(roadmap):
         raise InvalidInputError(f"cusps are points of 2-D slices, the grid has {grid.ndim} axes")
     fixed = dict(grid.fixed)
     found = []
+    coordinates = None
     for seed in _seeds(field):
         refined = mechanism.refine_cusp(seed, fixed)
         if refined is None:
@@ -99,7 +101,10 @@ def find_cusps(roadmap):
             continue
         if any(np.max(np.abs(joints - c.joints)) < _SAME_CUSP * mechanism.scale for c in found):
             continue
-        found.append(Cusp(joints=joints, pose=pose, regions=_regions_around(roadmap, cell)))
+        if coordinates is None:
+            coordinates = grid.coordinates_of(np.arange(grid.size))
+        found.append(Cusp(joints=joints, pose=pose,
+                          regions=_regions_around(roadmap, coordinates, cell)))
     return sorted(found, key=lambda c: tuple(c.joints))
 
 
@@ -254,9 +259,13 @@ def _spaced(points, spacing, most):
     return taken[:n_taken]
 
 
-def _regions_around(roadmap, cell):
-    grid, seg = roadmap.grid, roadmap.segmentation
-    index = np.unravel_index(cell, grid.shape)
-    window = tuple(slice(max(0, i - _REGION_REACH), i + _REGION_REACH + 1) for i in index)
-    regions = seg.region.reshape(grid.shape)[window]
+def _regions_around(roadmap, coordinates, cell):
+    """The regions of the cells within ``_REGION_REACH`` steps of ``cell``
+    along each axis (steps of the base grid of an adaptive one), from the
+    cells' ``coordinates``."""
+    grid = roadmap.grid
+    steps = np.asarray((grid.base if isinstance(grid, AdaptiveGrid) else grid).steps)
+    near = np.all(np.abs(coordinates - coordinates[cell]) <= (_REGION_REACH + 0.5) * steps,
+                  axis=1)
+    regions = roadmap.segmentation.region[near]
     return tuple(int(r) for r in np.unique(regions[regions > 0]))
