@@ -58,10 +58,10 @@ clear ends whose grid cell the scene leaves no way out)
 ``ERROR_INFEASIBLE`` with ``FEASIBILITY_BLOCKED``.  Ends in two components
 of one aspect with thin regions of that aspect left (the roadmap cannot say
 that no path exists) answer ``ERROR_UNDECIDED`` with
-``FEASIBILITY_UNDECIDED``, the thin regions and the grid's finest steps;
-a builder with a larger ``thin_refinement`` asks at a finer cell.  The plan workers apply
-each scene too, and plan in it once all of them have it; meanwhile its
-requests are planned in the node's process.
+``FEASIBILITY_UNDECIDED``, the thin regions and the grid's finest steps; a
+builder with a larger ``thin_refinement`` asks at a finer cell.  The plan
+workers apply each scene too, and plan in it once all of them have it;
+meanwhile its requests are planned in the node's process.
 """
 
 import itertools

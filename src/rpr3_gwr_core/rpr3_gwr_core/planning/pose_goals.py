@@ -376,7 +376,7 @@ def _unjoined(planner, undecided, message):
         return InfeasiblePathError(message, "unreachable")
     graph = planner.patch_graph
     thin = sorted({pid for patch in undecided for pid in graph.thin[graph.aspect[patch]]})
-    return UndecidedError(message + f"; thin regions of their aspect are left (patches "
-                          f"{', '.join(map(str, thin))}): a finer cell may join them", thin,
-                          planner.roadmap.grid.steps)
+    return UndecidedError(message + f"; thin regions of their aspect are left "
+                          f"(patch{'es' if len(thin) > 1 else ''} {', '.join(map(str, thin))}): "
+                          "a finer cell may join them", thin, planner.roadmap.grid.steps)
 
