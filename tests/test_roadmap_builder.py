@@ -14,6 +14,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rpr3_gwr_msgs.msg import NSolutionField
 from rpr3_gwr_nodes.profiles import LATCHED_QOS
+from rpr3_gwr_nodes import roadmap_builder
 from rpr3_gwr_nodes.roadmap_builder import RoadmapBuilder
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
@@ -131,6 +132,33 @@ def test_builder_refuses_grids_without_a_roadmap_and_keeps_the_last_good(rig):
     time.sleep(0.5)
     assert fields[-1] is good and len(builder.roadmap.segmentation.patches) > 0
     assert (builder.roadmap.grid.axes[0].low, builder.roadmap.grid.axes[0].high) == (0.0, 50.0)
+
+
+def test_a_roadmap_that_cannot_be_sent_leaves_the_last_one_and_the_builder_serving(
+        rig, monkeypatch):
+    builder, fields, arrived = rig.builder, rig.fields, rig.arrived
+    assert arrived.wait(TIMEOUT), "no field published"
+    good, converted = fields[-1], roadmap_builder.roadmap_to_msgs
+    failures = []
+
+    def fails_once(roadmap, header):
+        if not failures:
+            failures.append(roadmap)
+            raise RuntimeError("a roadmap no message can carry")
+        return converted(roadmap, header)
+
+    monkeypatch.setattr(roadmap_builder, "roadmap_to_msgs", fails_once)
+    assert builder.set_parameters([Parameter("fixed_value", value=13.0)])[0].successful
+    deadline = time.monotonic() + TIMEOUT
+    while not (failures and builder.get_parameter("fixed_value").value == 17.0):
+        assert time.monotonic() < deadline, "the parameters did not go back"
+        time.sleep(0.05)
+    assert fields[-1] is good and builder.roadmap.grid.fixed_value(0) == 17.0
+    # Still serving: the next change is built and sent.
+    arrived.clear()
+    assert builder.set_parameters([Parameter("fixed_value", value=13.0)])[0].successful
+    assert arrived.wait(TIMEOUT), "no field after the failed one"
+    assert fields[-1].grid.fixed[0].value == 13.0
 
 
 def test_the_builder_draws_the_field_and_the_roadmap_for_rviz(rig):

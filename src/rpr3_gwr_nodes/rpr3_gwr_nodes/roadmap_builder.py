@@ -282,22 +282,33 @@ class RoadmapBuilder(Node):
             self.get_logger().error("the roadmap has no patch")
             self._keep_last_good()
             return
-        first = self.roadmap is None
-        self.roadmap, self._published = roadmap, values
         built = time.perf_counter()
         header = Header(stamp=self.get_clock().now().to_msg(), frame_id=BASE_FRAME)
-        field_msg, roadmap_msg = roadmap_to_msgs(roadmap, header)
+        try:
+            field_msg, roadmap_msg = roadmap_to_msgs(roadmap, header)
+        except Exception as exc:  # as a failed build: the builder goes on
+            self.get_logger().error(f"converting the roadmap to messages failed: {exc!r}")
+            self._keep_last_good()
+            return
+        first = self.roadmap is None
+        self.roadmap, self._published = roadmap, values
         packed = time.perf_counter()
         self.field_pub.publish(field_msg)
         self.roadmap_pub.publish(roadmap_msg)
         sent = time.perf_counter()
-        maps = field_maps(roadmap, header.stamp)
+        try:
+            maps = field_maps(roadmap, header.stamp)
+            drawn = None if maps is None else (
+                roadmap_markers(roadmap, header.stamp),
+                TFMessage(transforms=[joint_space_transform(roadmap, header.stamp)]))
+        except Exception as exc:  # the roadmap is out; only its drawings are missing
+            self.get_logger().error(f"drawing the roadmap failed: {exc!r}")
+            maps = None
         if maps is not None:
             for publisher, grid_map in zip(self.map_pubs, maps):
                 publisher.publish(grid_map)
-            self.marker_pub.publish(roadmap_markers(roadmap, header.stamp))
-            self.tf_static_pub.publish(TFMessage(
-                transforms=[joint_space_transform(roadmap, header.stamp)]))
+            self.marker_pub.publish(drawn[0])
+            self.tf_static_pub.publish(drawn[1])
         self.get_logger().info(
             f"{'ready: ' if first else ''}published the roadmap on "
             f"{self.roadmap_pub.topic_name} and {self.field_pub.topic_name}: "
